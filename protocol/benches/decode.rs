@@ -1,0 +1,2 @@
+//! Decode throughput benchmarks (being built, issue 2).
+fn main() {}
