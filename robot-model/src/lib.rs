@@ -1,3 +1,9 @@
 #![doc = include_str!("../README.md")]
 
+pub mod boards;
+pub mod kinematics;
+pub mod motor;
+pub mod pose;
+pub mod profile;
+pub mod sensors;
 pub mod time;

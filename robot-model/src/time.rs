@@ -18,17 +18,13 @@ use core::ops::{Add, AddAssign, Sub, SubAssign};
 use serde::{Deserialize, Serialize};
 
 /// A point in run time, in microseconds since the run started.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
 pub struct Instant {
     micros: u64,
 }
 
 /// A span of run time in microseconds. Never negative: subtraction saturates at zero.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
 pub struct Duration {
     micros: u64,
 }
@@ -45,6 +41,11 @@ impl Instant {
     /// An instant `millis` milliseconds after the start.
     pub const fn from_millis(millis: u64) -> Self {
         Instant { micros: millis * 1000 }
+    }
+
+    /// An instant `secs` whole seconds after the start.
+    pub const fn from_secs(secs: u64) -> Self {
+        Instant { micros: secs * 1_000_000 }
     }
 
     /// An instant `secs` seconds after the start (rounded to the microsecond, negative → zero).
@@ -119,11 +120,7 @@ impl Duration {
 }
 
 fn secs_to_micros(secs: f64) -> u64 {
-    if secs.is_finite() && secs > 0.0 {
-        (secs * 1e6).round() as u64
-    } else {
-        0
-    }
+    if secs.is_finite() && secs > 0.0 { (secs * 1e6).round() as u64 } else { 0 }
 }
 
 impl Add<Duration> for Instant {

@@ -3,6 +3,19 @@
 //!
 //! Time here is microseconds since the run started, the same count as `robot_model::time::Instant`
 //! (this crate depends on nothing in the workspace, so it carries a plain `u64`).
+//!
+//! Links that need time take `impl Clock + 'static` and keep it as an `Arc<dyn Clock>`; clones of
+//! a [`MockClock`] share one time, so the runner keeps a clone and advances it.
+//!
+//! ```
+//! use transport::{Clock, MockClock};
+//! let clock = MockClock::new();
+//! let seen_by_link = clock.clone();
+//! clock.advance_micros(5_000);
+//! assert_eq!(seen_by_link.now_micros(), 5_000);
+//! clock.set_micros(1_000); // never backwards
+//! assert_eq!(seen_by_link.now_micros(), 5_000);
+//! ```
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -11,6 +24,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 pub trait Clock: Send + Sync {
     /// Microseconds since the run started.
     fn now_micros(&self) -> u64;
+}
+
+impl<C: Clock + ?Sized> Clock for Arc<C> {
+    fn now_micros(&self) -> u64 {
+        C::now_micros(self)
+    }
 }
 
 /// A clock that only moves when told to. Clones share the same time.

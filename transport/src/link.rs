@@ -15,6 +15,9 @@ use std::io;
 #[non_exhaustive]
 pub enum ErrorKind {
     /// The peer closed the link or was unplugged; reads and writes will keep failing.
+    ///
+    /// *NOTE*: one link outlives its peers: a [`PtyLink`](crate::PtyLink) master reports this
+    /// once per departed client, then waits (`Ok(0)`) for the next program to open the slave.
     Disconnected,
     /// The device or path could not be opened.
     NotFound,
@@ -60,12 +63,27 @@ impl Error {
         Error { kind, context: format!("{}: {err}", context.into()) }
     }
 
+    /// The same error as any [`LinkError`]: a clone when it already is an [`Error`], otherwise its
+    /// kind and message.
+    pub fn from_link_error<E: LinkError>(err: &E) -> Self {
+        let any: &(dyn std::error::Error + 'static) = err;
+        match any.downcast_ref::<Error>() {
+            Some(e) => e.clone(),
+            None => Error::new(err.kind(), err.to_string()),
+        }
+    }
+
     /// What kind of failure this is.
     pub fn kind(&self) -> ErrorKind {
         self.kind
     }
 
-    /// Whether the peer is gone (the caller should drop the link).
+    /// What was being done when it failed (e.g. the port path and the OS message).
+    pub fn context(&self) -> &str {
+        &self.context
+    }
+
+    /// Whether the peer is gone (the session is over; see [`ErrorKind::Disconnected`]).
     pub fn is_disconnected(&self) -> bool {
         self.kind == ErrorKind::Disconnected
     }

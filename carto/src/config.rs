@@ -1,0 +1,241 @@
+//! Carto's tuning: geometry, control gains, tolerances and timeouts, in one plain struct.
+//!
+//! Every number the controller uses lives here, so a user with another chassis changes the robot
+//! profile (or this struct), never code. [`CartoConfig::default`] matches the default robot of
+//! `robot.md` (mecanum 4WD, 0.30 m cells); [`CartoConfig::from_profile`] derives the geometry from a
+//! [`robot_model::profile::RobotProfile`] and keeps the controller defaults.
+//!
+//! Invariants: lengths in metres, angles in degrees, speeds as drive v2 percentages (±100, where
+//! 100 % is the profile's maximum wheel speed), times as [`Duration`].
+//!
+//! ```
+//! use carto::CartoConfig;
+//! let cfg = CartoConfig::default();
+//! assert!((cfg.cell_size_m - 0.30).abs() < 1e-9);
+//! // 11 pulses × 18.8 per wheel revolution, wheel radius 0.039 m → about 844 counts per metre
+//! assert!((cfg.encoder_counts_per_metre() - 843.9).abs() < 0.5);
+//! ```
+
+use protocol::motor::ChecksumPolicy;
+use robot_model::profile::{ChecksumSetting, RobotProfile};
+use robot_model::time::Duration;
+
+/// Everything Carto needs to know about the robot and how to drive it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CartoConfig {
+    /// Side of one grid cell, metres: one FORWARD drives this far.
+    pub cell_size_m: f64,
+    /// Wheel radius, metres.
+    pub wheel_radius_m: f64,
+    /// Distance between the front and rear axles, metres.
+    pub wheelbase_m: f64,
+    /// Distance between the left and right wheels, metres.
+    pub track_m: f64,
+    /// `tan` of the mecanum roller angle (1 at 45°): strafe distance = wheel travel / this.
+    pub roller_tan: f64,
+    /// Encoder counts per wheel revolution (pulses per motor revolution × gear ratio).
+    pub encoder_counts_per_wheel_rev: f64,
+    /// Wheel speed that a 100 % drive command means, rpm.
+    pub max_wheel_rpm: f64,
+
+    /// An ultrasound echo at or closer than this blocks the cell ahead, cm (default: one cell).
+    pub obstacle_threshold_cm: f32,
+    /// How long the obstacle check waits for a distance reading taken at rest before giving up.
+    pub distance_wait: Duration,
+    /// A distance reading older than this never counts for the obstacle check (the HC-SR04
+    /// reports at 10 Hz: three periods).
+    pub distance_max_age: Duration,
+
+    /// Cruise speed of a FORWARD, percent.
+    pub cruise_pct: f64,
+    /// Slowest drive command that still moves the robot (above the motor dead band), percent.
+    pub min_drive_pct: f64,
+    /// Acceleration ramp at the start of a FORWARD, percent per second.
+    pub accel_pct_per_s: f64,
+    /// Slow-down near the target: commanded speed = gain × remaining distance, percent per metre.
+    pub slow_gain_pct_per_m: f64,
+    /// Heading hold while driving straight: omega = gain × heading error, percent per degree.
+    pub hold_gain_pct_per_deg: f64,
+    /// Largest heading-hold correction, percent.
+    pub hold_max_pct: f64,
+    /// Lateral hold while driving a cell: vy = −gain × offset left of the track, percent per metre.
+    pub lateral_gain_pct_per_m: f64,
+    /// Largest lateral-hold strafe, percent.
+    pub lateral_max_pct: f64,
+    /// Turn speed law: omega = gain × remaining angle, percent per degree.
+    pub turn_gain_pct_per_deg: f64,
+    /// Fastest turn, percent.
+    pub turn_max_pct: f64,
+    /// Slowest turn that still moves the robot, percent.
+    pub turn_min_pct: f64,
+    /// Motion continues this long after a zero command (motor lag): stop that much early, seconds.
+    pub stop_lead_s: f64,
+
+    /// How fast the stop point learns the robot's systematic overshoot (0 = off): after each
+    /// FORWARD the stop moves earlier by this fraction of the overshoot seen at rest.
+    pub coast_learn_gain: f64,
+    /// A FORWARD ends within this distance of its target, metres.
+    pub distance_tolerance_m: f64,
+    /// A FORWARD that ends further than this off its track strafes back (a correction), metres.
+    pub lateral_tolerance_m: f64,
+    /// Slowest strafe that still moves the robot sideways (settle corrections), percent.
+    pub min_strafe_pct: f64,
+    /// A turn ends within this angle of its target, degrees.
+    pub heading_tolerance_deg: f64,
+    /// After a zero command, readings count as "at rest" once taken this long after the stop.
+    pub settle_time: Duration,
+    /// Corrective nudges allowed after the first stop before a move fails.
+    pub max_corrections: u8,
+    /// A move that has not finished after this long is stopped and fails.
+    pub move_timeout: Duration,
+    /// A reading older than this is stale: a move cannot start, a running move stops and fails.
+    pub sensor_stale_after: Duration,
+    /// Time constant of the IMU drift estimate against the wheels' heading, seconds (0 = off).
+    pub imu_drift_tau_s: f64,
+    /// Fastest change of the IMU drift estimate, degrees per minute.
+    pub imu_drift_max_deg_per_min: f64,
+    /// Motor telemetry (wheel rpm) younger than this is used to extrapolate odometry.
+    pub telemetry_fresh: Duration,
+    /// Odometry is extrapolated from the last reading by at most this long.
+    pub max_extrapolation: Duration,
+
+    /// While a move runs, the drive command is repeated this often (board watchdog: 500 ms).
+    pub drive_resend_period: Duration,
+    /// While idle, the zero drive command is repeated this often.
+    pub idle_resend_period: Duration,
+    /// `speed_ratio` byte of every drive v2 frame (unused by the firmware).
+    pub speed_ratio: u8,
+
+    /// Carto's keep-state period towards the sensor board (2 Hz).
+    pub keep_state_period: Duration,
+    /// No keep-state from the sensor board for this long → peer lost.
+    pub peer_lost_after: Duration,
+
+    /// Largest accepted link frame `Size`, bytes.
+    pub max_frame: usize,
+    /// After the bumper stops a FORWARD, drive back to the cell the move started from.
+    pub back_off_after_bump: bool,
+    /// Checksums accepted on the motor board's frames (what its firmware emits).
+    pub motor_checksum: ChecksumPolicy,
+    /// Motor board line speed, baud, for reading time stamps (0 = take arrival times as is).
+    pub motor_baud: u32,
+    /// Sensor board line speed, baud, for reading time stamps (0 = take arrival times as is).
+    pub sensor_baud: u32,
+}
+
+impl Default for CartoConfig {
+    fn default() -> Self {
+        CartoConfig {
+            cell_size_m: 0.30,
+            wheel_radius_m: 0.039,
+            wheelbase_m: 0.20,
+            track_m: 0.18,
+            roller_tan: 1.0,
+            encoder_counts_per_wheel_rev: 11.0 * 18.8,
+            max_wheel_rpm: 300.0,
+            obstacle_threshold_cm: 30.0,
+            distance_wait: Duration::from_millis(1000),
+            distance_max_age: Duration::from_millis(300),
+            cruise_pct: 30.0,
+            min_drive_pct: 8.0,
+            accel_pct_per_s: 120.0,
+            slow_gain_pct_per_m: 150.0,
+            hold_gain_pct_per_deg: 1.5,
+            hold_max_pct: 10.0,
+            lateral_gain_pct_per_m: 200.0,
+            lateral_max_pct: 6.0,
+            turn_gain_pct_per_deg: 0.5,
+            turn_max_pct: 25.0,
+            turn_min_pct: 8.0,
+            stop_lead_s: 0.08,
+            coast_learn_gain: 0.5,
+            distance_tolerance_m: 0.01,
+            lateral_tolerance_m: 0.01,
+            min_strafe_pct: 8.0,
+            heading_tolerance_deg: 2.0,
+            settle_time: Duration::from_millis(200),
+            max_corrections: 4,
+            move_timeout: Duration::from_secs(8),
+            sensor_stale_after: Duration::from_millis(600),
+            imu_drift_tau_s: 2.0,
+            imu_drift_max_deg_per_min: 3.0,
+            telemetry_fresh: Duration::from_millis(150),
+            max_extrapolation: Duration::from_millis(300),
+            drive_resend_period: Duration::from_millis(100),
+            idle_resend_period: Duration::from_millis(500),
+            speed_ratio: 100,
+            keep_state_period: Duration::from_millis(500),
+            peer_lost_after: Duration::from_millis(1500),
+            max_frame: 1024,
+            back_off_after_bump: true,
+            motor_checksum: ChecksumPolicy::Sum,
+            motor_baud: 115_200,
+            sensor_baud: 9600,
+        }
+    }
+}
+
+impl CartoConfig {
+    /// The controller defaults with the geometry, encoder, speed, cell size, motor checksum and
+    /// peer-lost timeout of `profile`; the obstacle threshold is one cell.
+    pub fn from_profile(profile: &RobotProfile) -> Self {
+        let g = &profile.geometry;
+        // Profile values are f32: keep their 7 significant digits so 0.30 stays 0.30 in f64.
+        let f = |v: f32| {
+            let v = f64::from(v);
+            if v == 0.0 || !v.is_finite() {
+                return v;
+            }
+            let scale = 10f64.powi(6 - v.abs().log10().floor() as i32);
+            (v * scale).round() / scale
+        };
+        let cell = f(profile.grid_cell_m);
+        CartoConfig {
+            cell_size_m: cell,
+            wheel_radius_m: f(g.wheel_radius_m),
+            wheelbase_m: f(g.wheelbase_m),
+            track_m: f(g.track_m),
+            roller_tan: (f(profile.wheels.roller_angle_deg).to_radians().tan() * 1e9).round() / 1e9,
+            encoder_counts_per_wheel_rev: f(profile.encoder.pulses_per_motor_rev)
+                * f(profile.motor.gear_ratio),
+            max_wheel_rpm: f(profile.motor.max_wheel_rpm),
+            obstacle_threshold_cm: (cell * 100.0) as f32,
+            peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
+            motor_baud: profile.serial.motor_baud,
+            sensor_baud: profile.serial.sensor_baud,
+            motor_checksum: match profile.motor_board.checksum {
+                ChecksumSetting::Sum => ChecksumPolicy::Sum,
+                ChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
+                ChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
+            },
+            ..CartoConfig::default()
+        }
+    }
+
+    /// Encoder counts per metre of wheel travel.
+    pub fn encoder_counts_per_metre(&self) -> f64 {
+        self.encoder_counts_per_wheel_rev / (2.0 * core::f64::consts::PI * self.wheel_radius_m)
+    }
+
+    /// Wheel rim speed at 100 % drive, m/s.
+    pub fn max_wheel_speed_mps(&self) -> f64 {
+        self.max_wheel_rpm / 60.0 * 2.0 * core::f64::consts::PI * self.wheel_radius_m
+    }
+
+    /// Half track + tan γ × half wheelbase: the lever arm of a mecanum wheel for rotation, metres
+    /// (0.19 m for the default robot).
+    pub fn rotation_lever_m(&self) -> f64 {
+        0.5 * self.track_m + self.roller_tan * 0.5 * self.wheelbase_m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn from_default_profile_matches_the_built_in_default() {
+        let from = CartoConfig::from_profile(&RobotProfile::default());
+        assert_eq!(from, CartoConfig::default());
+    }
+}

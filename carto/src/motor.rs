@@ -1,0 +1,605 @@
+//! The motor controller: one closed-loop move at a time, expressed as drive v2 setpoints.
+//!
+//! Concept: a move is a *goal* (a distance on the mean wheel odometry, or a yaw on the IMU) run in
+//! two phases. **Active**: the controller commands a speed every poll — for a distance, the
+//! minimum of the cruise speed, an acceleration ramp and a slow-down proportional to the remaining
+//! distance, never below the minimum that still moves the robot, with a proportional heading hold
+//! on `omega` so it drives straight; for a turn, `omega` proportional to the remaining angle with a
+//! minimum. It stops early by the distance the robot coasts after a zero command (motor lag,
+//! [`CartoConfig::stop_lead_s`]). **Settling**: the command is zero and the controller waits for
+//! readings taken at rest; within tolerance (±1 cm, ±2°) the move is done, otherwise it nudges
+//! again at low speed, at most [`CartoConfig::max_corrections`] times.
+//!
+//! The cartography FORWARD ([`Motor::start_next_cell`]) is *absolute*: it drives `cell − along` to
+//! the next cell's centre, where `along` comes from the [`Odometry`] this controller keeps (the
+//! offset from the current cell's centre), strafes (`vy`) the lateral offset back to zero while
+//! driving, and, if it still ends more than [`CartoConfig::lateral_tolerance_m`] off its track,
+//! strafes back as a settle correction (a **Strafe** phase). The stop point also learns the robot's
+//! systematic overshoot ([`Motor::coast_bias_m`]).
+//!
+//! Turns and the heading hold aim at a *reference yaw* that moves by exactly 90° per successful
+//! turn, so turn errors do not accumulate; it is learnt from the IMU on the first move and re-learnt
+//! when the IMU disagrees with it by more than 20° (robot pushed, a failed turn).
+//!
+//! Invariants:
+//! - the command the board should apply is always [`Motor::command`]; it is (re)sent when it
+//!   changes and otherwise every [`CartoConfig::drive_resend_period`] while moving and every
+//!   [`CartoConfig::idle_resend_period`] when idle (the zero command), so the board's 500 ms
+//!   watchdog never trips during a move;
+//! - [`Motor::stop`] sets the zero command and queues it at once;
+//! - every move ends, with success or a [`MoveError`], by [`CartoConfig::move_timeout`] at the latest.
+//!
+//! ```
+//! use carto::motor::{Drive, Motor};
+//! use carto::CartoConfig;
+//! use robot_model::time::Instant;
+//! let mut m = Motor::new(CartoConfig::default());
+//! m.poll(Instant::ZERO, &Default::default());
+//! assert_eq!(m.take_drives(), vec![Drive::STOP]); // idle: the zero command goes out at once
+//! ```
+
+use robot_model::time::Instant;
+
+use crate::CartoConfig;
+use crate::odometry::{CellOffset, Odometry};
+use crate::sensors::SensorState;
+
+/// A drive v2 setpoint: percentages, vx forward, vy left, omega counter-clockwise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Drive {
+    /// Forward speed, percent (±100).
+    pub vx: i8,
+    /// Leftward speed, percent (±100).
+    pub vy: i8,
+    /// Counter-clockwise rotation, percent (±100).
+    pub omega: i8,
+}
+
+impl Drive {
+    /// All zero: the wheels stop.
+    pub const STOP: Drive = Drive { vx: 0, vy: 0, omega: 0 };
+
+    /// Whether this is the zero command.
+    pub fn is_stop(&self) -> bool {
+        *self == Drive::STOP
+    }
+}
+
+/// Why a move failed. The robot is stopped whenever one of these is reported.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MoveError {
+    /// The move did not finish in time.
+    #[error("move timed out after {after_ms} ms")]
+    Timeout {
+        /// Milliseconds since the move started.
+        after_ms: u64,
+    },
+    /// A sensor the move needs has never reported.
+    #[error("no {sensor} reading")]
+    MissingReading {
+        /// Which sensor.
+        sensor: &'static str,
+    },
+    /// A sensor the move needs stopped reporting.
+    #[error("{sensor} reading is stale ({age_ms} ms old)")]
+    StaleReading {
+        /// Which sensor.
+        sensor: &'static str,
+        /// Age of its last reading.
+        age_ms: u64,
+    },
+    /// The robot did not settle within tolerance after all corrections.
+    #[error("no convergence after {corrections} corrections (error {error:.3})")]
+    NotConverged {
+        /// Corrections tried.
+        corrections: u8,
+        /// Remaining error (metres or degrees).
+        error: f64,
+    },
+    /// A return move was asked with no FORWARD to return from.
+    #[error("no forward move to return from")]
+    NothingToReturnFrom,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Goal {
+    /// Mean wheel travel from `baseline` reaches `target_m`.
+    Distance { baseline: [i32; 4], target_m: f64 },
+    /// Yaw reaches `target_deg` (unwrapped, counter-clockwise).
+    Yaw { target_deg: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    Active {
+        since: Instant,
+        sign: f64,
+    },
+    /// A settle correction of the lateral offset alone: strafe back to the track.
+    Strafe {
+        sign: f64,
+    },
+    Settling {
+        stopped_at: Instant,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Move {
+    goal: Goal,
+    phase: Phase,
+    started: Instant,
+    corrections: u8,
+    hold_deg: Option<f64>,
+    /// On success the odometry's origin moves this far ahead (one cell for a cell move).
+    advance_m: f64,
+    /// Remaining error (signed along the move) at rest after the first stop, for learning.
+    first_stop_err: Option<f64>,
+}
+
+/// The closed-loop motor controller (see the module docs).
+#[derive(Debug, Clone)]
+pub struct Motor {
+    cfg: CartoConfig,
+    current: Option<Move>,
+    outcome: Option<Result<(), MoveError>>,
+    command: Drive,
+    last_sent: Option<(Drive, Instant)>,
+    out: Vec<Drive>,
+    reference_deg: Option<f64>,
+    last_baseline: Option<[i32; 4]>,
+    odo: Odometry,
+    coast_bias_m: f64,
+}
+
+impl Motor {
+    /// An idle controller.
+    pub fn new(cfg: CartoConfig) -> Self {
+        Motor {
+            cfg,
+            current: None,
+            outcome: None,
+            command: Drive::STOP,
+            last_sent: None,
+            out: Vec::new(),
+            reference_deg: None,
+            last_baseline: None,
+            odo: Odometry::default(),
+            coast_bias_m: 0.0,
+        }
+    }
+
+    /// Whether a move is running.
+    pub fn is_busy(&self) -> bool {
+        self.current.is_some()
+    }
+
+    /// The command the board should be applying now.
+    pub fn command(&self) -> Drive {
+        self.command
+    }
+
+    /// Starts a FORWARD of `metres` (negative drives backwards) on the wheel odometry, relative
+    /// to where the robot is. It holds the heading and the track (lateral offset zero) but does
+    /// not move the cell origin: the cartography FORWARD is [`Motor::start_next_cell`].
+    pub fn start_forward(&mut self, now: Instant, metres: f64, s: &SensorState) -> Result<(), MoveError> {
+        let counts = self.fresh_counts(now, s)?;
+        let hold = self.hold_reference(now, s)?;
+        self.last_baseline = Some(counts);
+        self.begin(now, Goal::Distance { baseline: counts, target_m: metres }, Some(hold), 0.0, s);
+        Ok(())
+    }
+
+    /// Starts the cartography FORWARD: drive to the centre of the next cell, i.e. `cell − along`
+    /// where `along` is the odometry's offset from the current cell's centre (clamped to
+    /// [−½ cell, 1 cell]: a FORWARD never drives backwards nor further than 1½ cells), holding
+    /// heading and track. On success the
+    /// odometry's origin moves one cell ahead. Returns the distance it drives, metres.
+    pub fn start_next_cell(&mut self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
+        self.fresh_counts(now, s)?;
+        self.hold_reference(now, s)?;
+        let cell = self.cfg.cell_size_m;
+        // The offset and the baseline counts of the same sample, so the target is consistent.
+        let off = self.odo.offset();
+        let metres = cell - off.along_m.clamp(-0.5 * cell, cell);
+        tracing::debug!(
+            along_m = off.along_m,
+            left_m = off.left_m,
+            metres,
+            "forward to the next cell's centre"
+        );
+        let counts = self.odo.baseline_counts().unwrap_or(self.fresh_counts(now, s)?);
+        let hold = self.hold_reference(now, s)?;
+        self.last_baseline = Some(counts);
+        self.begin(now, Goal::Distance { baseline: counts, target_m: metres }, Some(hold), cell, s);
+        Ok(metres)
+    }
+
+    /// Drives back to the centre of the cell the robot believes it is in (after the bumper stopped
+    /// a FORWARD), on the odometry. Needs a FORWARD to have started before.
+    pub fn start_return(&mut self, now: Instant, s: &SensorState) -> Result<(), MoveError> {
+        if self.last_baseline.is_none() {
+            return Err(MoveError::NothingToReturnFrom);
+        }
+        let fresh = self.fresh_counts(now, s)?;
+        let hold = self.hold_reference(now, s)?;
+        // The offset and the baseline counts of the same sample (the robot may still be coasting).
+        let along = self.odo.offset().along_m;
+        let counts = self.odo.baseline_counts().unwrap_or(fresh);
+        self.begin(now, Goal::Distance { baseline: counts, target_m: -along }, Some(hold), 0.0, s);
+        Ok(())
+    }
+
+    /// The robot is at the centre of its cell: Cute sent a fresh pose (`SEND_ROBOT_POSITION`).
+    pub fn reset_odometry(&mut self) {
+        self.odo.reset();
+    }
+
+    /// The dead-reckoned offset from the centre of the current cell, extrapolated to `now`.
+    pub fn cell_offset(&self, now: Instant, s: &SensorState) -> CellOffset {
+        self.odo.predicted(now, s, &self.cfg)
+    }
+
+    /// The odometry: the offset at the last complete encoder sample, in the nominal frame.
+    pub fn odometry(&self) -> &Odometry {
+        &self.odo
+    }
+
+    /// Starts a 90° turn on the spot: clockwise (RIGHT) when `clockwise`, else counter-clockwise.
+    pub fn start_turn(&mut self, now: Instant, clockwise: bool, s: &SensorState) -> Result<(), MoveError> {
+        let reference = self.hold_reference(now, s)?;
+        let target_deg = if clockwise { reference - 90.0 } else { reference + 90.0 };
+        self.begin(now, Goal::Yaw { target_deg }, None, 0.0, s);
+        Ok(())
+    }
+
+    /// Aborts any move and commands zero at once. No outcome is reported for an aborted move.
+    pub fn stop(&mut self, now: Instant) {
+        if let Some(m) = self.current.take()
+            && let Goal::Yaw { .. } = m.goal
+        {
+            // A turn cut short leaves the heading between two grid headings.
+            self.reference_deg = None;
+        }
+        self.outcome = None;
+        self.set_command(now, Drive::STOP, true);
+    }
+
+    /// Forgets the reference yaw (the IMU heading will be learnt again on the next move).
+    pub fn forget_reference(&mut self) {
+        self.reference_deg = None;
+    }
+
+    /// Metres driven since the last FORWARD started (mean wheel odometry, last readings).
+    pub fn travelled_m(&self, s: &SensorState) -> Option<f64> {
+        let base = self.last_baseline?;
+        let counts = s.counts()?.value;
+        Some(mean_delta(&counts.map(f64::from), &base) / self.cfg.encoder_counts_per_metre())
+    }
+
+    /// The outcome of the move that just ended, once.
+    pub fn take_outcome(&mut self) -> Option<Result<(), MoveError>> {
+        self.outcome.take()
+    }
+
+    /// Drive commands queued for the board since the last call, oldest first.
+    pub fn take_drives(&mut self) -> Vec<Drive> {
+        core::mem::take(&mut self.out)
+    }
+
+    /// Runs the control loop and the periodic resend. A finished move's outcome becomes
+    /// available from [`Motor::take_outcome`].
+    pub fn poll(&mut self, now: Instant, s: &SensorState) {
+        let turning = self.current.is_some_and(|m| matches!(m.goal, Goal::Yaw { .. }));
+        self.odo.update_with(s, &self.cfg, !turning);
+        if let Some(mut m) = self.current {
+            match self.step(now, &mut m, s) {
+                Step::Continue(drive) => {
+                    self.current = Some(m);
+                    self.set_command(now, drive, false);
+                }
+                Step::Finished(result) => {
+                    self.current = None;
+                    self.learn_coast(&m);
+                    if let (Ok(()), Goal::Yaw { target_deg }) = (&result, m.goal) {
+                        self.reference_deg = Some(target_deg);
+                        self.odo.set_frame(target_deg);
+                    }
+                    if result.is_ok() && m.advance_m != 0.0 {
+                        self.odo.advance(m.advance_m);
+                    }
+                    if result.is_err() && matches!(m.goal, Goal::Yaw { .. }) {
+                        self.reference_deg = None;
+                    }
+                    self.outcome = Some(result);
+                    self.set_command(now, Drive::STOP, false);
+                }
+            }
+        }
+        let period =
+            if self.current.is_some() { self.cfg.drive_resend_period } else { self.cfg.idle_resend_period };
+        let due = self.last_sent.is_none_or(|(_, at)| now.saturating_since(at) >= period);
+        if due {
+            self.set_command(now, self.command, true);
+        }
+    }
+
+    /// The next time `poll` must run for the resend cadence (the control loop wants every poll).
+    pub fn next_deadline(&self) -> Option<Instant> {
+        let period =
+            if self.current.is_some() { self.cfg.drive_resend_period } else { self.cfg.idle_resend_period };
+        self.last_sent.map(|(_, at)| at + period)
+    }
+
+    fn set_command(&mut self, now: Instant, drive: Drive, force: bool) {
+        self.command = drive;
+        let changed = self.last_sent.is_none_or(|(d, _)| d != drive);
+        if changed || force {
+            self.out.push(drive);
+            self.last_sent = Some((drive, now));
+        }
+    }
+
+    fn begin(&mut self, now: Instant, goal: Goal, hold_deg: Option<f64>, advance_m: f64, s: &SensorState) {
+        self.outcome = None;
+        let mut m = Move {
+            goal,
+            phase: Phase::Active { since: now, sign: 0.0 },
+            started: now,
+            corrections: 0,
+            hold_deg,
+            advance_m,
+            first_stop_err: None,
+        };
+        m.phase = Phase::Active { since: now, sign: self.error(&m, now, s, true).map_or(1.0, sign_of) };
+        self.current = Some(m);
+        self.poll(now, s);
+    }
+
+    fn fresh_counts(&self, now: Instant, s: &SensorState) -> Result<[i32; 4], MoveError> {
+        let c = s.counts().ok_or(MoveError::MissingReading { sensor: "encoder" })?;
+        let age = now.saturating_since(c.at);
+        if age > self.cfg.sensor_stale_after {
+            return Err(MoveError::StaleReading { sensor: "encoder", age_ms: age.total_millis() });
+        }
+        Ok(c.value)
+    }
+
+    fn fresh_yaw(&self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
+        let y = s.yaw_deg().ok_or(MoveError::MissingReading { sensor: "imu heading" })?;
+        let age = now.saturating_since(y.at);
+        if age > self.cfg.sensor_stale_after {
+            return Err(MoveError::StaleReading { sensor: "imu heading", age_ms: age.total_millis() });
+        }
+        Ok(y.value)
+    }
+
+    fn hold_reference(&mut self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
+        let yaw = self.fresh_yaw(now, s)?;
+        let reference = match self.reference_deg {
+            Some(r) if (r - yaw).abs() <= 20.0 => r,
+            Some(r) => {
+                tracing::info!(
+                    reference = r,
+                    imu = yaw,
+                    "imu disagrees with the reference heading, re-learning it"
+                );
+                yaw
+            }
+            None => yaw,
+        };
+        self.reference_deg = Some(reference);
+        self.odo.set_frame(reference);
+        Ok(reference)
+    }
+
+    /// Remaining error: metres for a distance goal, degrees for a yaw goal. `predict` extrapolates
+    /// to `now`; otherwise the last readings are used as they are.
+    fn error(&self, m: &Move, now: Instant, s: &SensorState, predict: bool) -> Option<f64> {
+        match m.goal {
+            Goal::Distance { baseline, target_m } => {
+                let counts = if predict {
+                    s.predicted_counts(now, &self.cfg)?
+                } else {
+                    s.counts()?.value.map(f64::from)
+                };
+                Some(target_m - mean_delta(&counts, &baseline) / self.cfg.encoder_counts_per_metre())
+            }
+            Goal::Yaw { target_deg } => {
+                let yaw = if predict { s.predicted_yaw(now, &self.cfg)? } else { s.yaw_deg()?.value };
+                Some(target_deg - yaw)
+            }
+        }
+    }
+
+    /// The robot's systematic overshoot after a stop, beyond the motor-lag model, learnt from the
+    /// FORWARDs so far, metres (subtracted from the stop point).
+    pub fn coast_bias_m(&self) -> f64 {
+        self.coast_bias_m
+    }
+
+    /// Learns the stop bias from a distance move's first stop: an overshoot of `o` moves the stop
+    /// point earlier by `gain × o` next time (integral action, clamped).
+    fn learn_coast(&mut self, m: &Move) {
+        let (Goal::Distance { target_m, .. }, Some(err)) = (m.goal, m.first_stop_err) else {
+            return;
+        };
+        let overshoot = -err * sign_of(target_m);
+        let cfg = &self.cfg;
+        self.coast_bias_m = (self.coast_bias_m + cfg.coast_learn_gain * overshoot)
+            .clamp(-0.5 * cfg.distance_tolerance_m, 2.0 * cfg.distance_tolerance_m);
+    }
+
+    /// Heading hold on `omega`, percent.
+    fn hold_omega(&self, m: &Move, now: Instant, s: &SensorState) -> f64 {
+        let cfg = &self.cfg;
+        match (m.hold_deg, s.predicted_yaw(now, cfg)) {
+            (Some(h), Some(y)) => {
+                (cfg.hold_gain_pct_per_deg * (h - y)).clamp(-cfg.hold_max_pct, cfg.hold_max_pct)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Lateral speed of the body from the wheel rates, m/s left.
+    fn lateral_speed_mps(&self, now: Instant, s: &SensorState) -> f64 {
+        let rates = core::array::from_fn(|i| s.wheel_rate_cps(i, now, &self.cfg));
+        Odometry::body_delta(rates, &self.cfg).1
+    }
+
+    /// Readings a running move needs: encoders for a distance, the IMU for a turn or a hold.
+    fn check_fresh(&self, m: &Move, now: Instant, s: &SensorState) -> Result<(), MoveError> {
+        if matches!(m.goal, Goal::Distance { .. }) {
+            self.fresh_counts(now, s)?;
+        }
+        if !matches!(m.goal, Goal::Distance { .. }) || m.hold_deg.is_some() {
+            self.fresh_yaw(now, s)?;
+        }
+        Ok(())
+    }
+
+    fn step(&self, now: Instant, m: &mut Move, s: &SensorState) -> Step {
+        let cfg = &self.cfg;
+        let elapsed = now.saturating_since(m.started);
+        if elapsed >= cfg.move_timeout {
+            return Step::Finished(Err(MoveError::Timeout { after_ms: elapsed.total_millis() }));
+        }
+        let is_distance = matches!(m.goal, Goal::Distance { .. });
+        match m.phase {
+            Phase::Active { since, sign } => {
+                // Readings must keep coming while moving.
+                if let Err(e) = self.check_fresh(m, now, s) {
+                    return Step::Finished(Err(e));
+                }
+                let Some(err) = self.error(m, now, s, true) else {
+                    return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
+                };
+                let ramp = now.saturating_since(since).as_secs_f64() * cfg.accel_pct_per_s;
+                if is_distance {
+                    let speed = s.forward_speed_mps(now, cfg).abs();
+                    let lead =
+                        (speed * cfg.stop_lead_s + self.coast_bias_m).max(0.3 * cfg.distance_tolerance_m);
+                    if err.abs() <= lead || sign_of(err) != sign {
+                        m.phase = Phase::Settling { stopped_at: now };
+                        return Step::Continue(Drive::STOP);
+                    }
+                    let pct = (cfg.slow_gain_pct_per_m * err.abs())
+                        .min(cfg.cruise_pct)
+                        .min(cfg.min_drive_pct + ramp)
+                        .max(cfg.min_drive_pct);
+                    // Lateral hold: strafe back to the track while driving.
+                    let left = self.odo.predicted(now, s, cfg).left_m;
+                    let vy =
+                        (-cfg.lateral_gain_pct_per_m * left).clamp(-cfg.lateral_max_pct, cfg.lateral_max_pct);
+                    Step::Continue(Drive {
+                        vx: pct_i8(sign * pct),
+                        vy: pct_i8(vy),
+                        omega: pct_i8(self.hold_omega(m, now, s)),
+                    })
+                } else {
+                    let rate = s.yaw_rate_dps(now, cfg).abs();
+                    let lead = (rate * cfg.stop_lead_s).max(0.25 * cfg.heading_tolerance_deg);
+                    if err.abs() <= lead || sign_of(err) != sign {
+                        m.phase = Phase::Settling { stopped_at: now };
+                        return Step::Continue(Drive::STOP);
+                    }
+                    let pct = (cfg.turn_gain_pct_per_deg * err.abs())
+                        .min(cfg.turn_max_pct)
+                        .min(cfg.turn_min_pct + ramp)
+                        .max(cfg.turn_min_pct);
+                    Step::Continue(Drive { vx: 0, vy: 0, omega: pct_i8(sign * pct) })
+                }
+            }
+            Phase::Strafe { sign } => {
+                if let Err(e) = self.check_fresh(m, now, s) {
+                    return Step::Finished(Err(e));
+                }
+                let err = -self.odo.predicted(now, s, cfg).left_m;
+                let speed = self.lateral_speed_mps(now, s).abs();
+                let lead = (speed * cfg.stop_lead_s).max(0.3 * cfg.lateral_tolerance_m);
+                if err.abs() <= lead || sign_of(err) != sign {
+                    m.phase = Phase::Settling { stopped_at: now };
+                    return Step::Continue(Drive::STOP);
+                }
+                let pct = (cfg.lateral_gain_pct_per_m * err.abs()).max(cfg.min_strafe_pct);
+                Step::Continue(Drive {
+                    vx: 0,
+                    vy: pct_i8(sign * pct),
+                    omega: pct_i8(self.hold_omega(m, now, s)),
+                })
+            }
+            Phase::Settling { stopped_at } => {
+                let rest = stopped_at + cfg.settle_time;
+                let settled = if is_distance {
+                    s.counts_since().is_some_and(|t| t >= rest)
+                } else {
+                    s.yaw_deg().is_some_and(|y| y.at >= rest)
+                };
+                if !settled {
+                    return Step::Continue(Drive::STOP);
+                }
+                let Some(err) = self.error(m, now, s, false) else {
+                    return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
+                };
+                let tol = if is_distance { cfg.distance_tolerance_m } else { cfg.heading_tolerance_deg };
+                // A distance move also ends on its track (the odometry has integrated the readings
+                // at rest by now: `poll` updates it first).
+                let left = if is_distance { self.odo.offset().left_m } else { 0.0 };
+                if let Goal::Distance { target_m, .. } = m.goal
+                    && m.corrections == 0
+                    && m.first_stop_err.is_none()
+                    && target_m.abs() >= 0.05
+                {
+                    m.first_stop_err = Some(err);
+                }
+                let on_track = left.abs() <= cfg.lateral_tolerance_m;
+                if err.abs() <= tol && on_track {
+                    tracing::debug!(error = err, left_m = left, corrections = m.corrections, "move done");
+                    return Step::Finished(Ok(()));
+                }
+                if m.corrections >= cfg.max_corrections {
+                    if err.abs() <= tol {
+                        // Off the track but at the target: the next FORWARD keeps correcting.
+                        tracing::warn!(left_m = left, "move ends off its track after all corrections");
+                        return Step::Finished(Ok(()));
+                    }
+                    return Step::Finished(Err(MoveError::NotConverged {
+                        corrections: m.corrections,
+                        error: err,
+                    }));
+                }
+                m.corrections += 1;
+                tracing::debug!(
+                    error = err,
+                    left_m = left,
+                    correction = m.corrections,
+                    "move outside tolerance, correcting"
+                );
+                m.phase = if err.abs() > tol {
+                    Phase::Active { since: now, sign: sign_of(err) }
+                } else {
+                    Phase::Strafe { sign: sign_of(-left) }
+                };
+                self.step(now, m, s)
+            }
+        }
+    }
+}
+
+enum Step {
+    Continue(Drive),
+    Finished(Result<(), MoveError>),
+}
+
+fn sign_of(v: f64) -> f64 {
+    if v < 0.0 { -1.0 } else { 1.0 }
+}
+
+fn mean_delta(counts: &[f64; 4], baseline: &[i32; 4]) -> f64 {
+    counts.iter().zip(baseline).map(|(c, b)| c - f64::from(*b)).sum::<f64>() / 4.0
+}
+
+fn pct_i8(v: f64) -> i8 {
+    v.round().clamp(-100.0, 100.0) as i8
+}

@@ -1,0 +1,564 @@
+//! The pilot: Carto's side of the link session with Cute, as a sans-IO state machine.
+//!
+//! Concept: decoded [`Request`]s come in through [`Pilot::handle`]; [`Pilot::poll`] runs the work
+//! they created — one *task* at a time, each a list of commands — by asking the [`Ultrasound`] and
+//! driving the [`Motor`]; [`Reply`]s to send back pile up for [`Pilot::take_replies`].
+//!
+//! Behaviour (`protocols.md` §1, "Carto's behaviour"):
+//! - `SEND_ROBOT_POSITION` stores the pose and answers `ROBOT_POSITION_RECEIVED` (a direction above
+//!   3 is logged, not stored, and still acknowledged so Cute does not wait for ever).
+//! - `SEND_MOVE_CARTOGRAPHY(c)` becomes a task of one command. FORWARD checks the ultrasound first
+//!   (obstacle → `SET_OBSTACLE_POSITION(cell ahead)`, no motion), else drives one cell, updates the
+//!   pose and answers `SET_ROBOT_POSITION`; turns update the heading; then `MOVE_DONE`. A command
+//!   that cannot run (no pose yet, cell ahead off the grid, value above 2, a board lost, a sensor
+//!   silent, a failed move) is logged and answered with `MOVE_DONE` only.
+//! - `SEND_MOVES_TRAJECTORY` frames accumulate into a batch of `n_total` (another `n_total`
+//!   discards the partial batch, `n_total = 0` is ignored); a complete batch becomes a task run
+//!   asynchronously: obstacle check before each FORWARD (obstacle → `SET_OBSTACLE_POSITION` when
+//!   the pose is known, rest aborted), `SET_ROBOT_POSITION` after each FORWARD when the pose is
+//!   known, `MOVE_DONE` when the batch ends (also when it is aborted). Without a pose a batch still
+//!   runs (the original Cute never sends one). STOP (3) inside a batch is a no-op, an unknown value
+//!   is skipped; both are logged.
+//! - `STOP_ROBOT` stops the motors now and drops every pending command and partial batch; no reply.
+//! - Tasks queue in arrival order; a new request never interrupts a running task (only STOP does).
+//! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
+//!   rest is aborted, and (by default) the robot drives back to the cell it started from before
+//!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
+//!
+//! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP or a disconnect drops it;
+//! the stored pose changes only by `SEND_ROBOT_POSITION` or a completed move.
+//!
+//! ```
+//! use carto::pilot::{Health, Pilot, Reply, Request};
+//! use carto::{motor::Motor, sensors::SensorState, ultrasound::Ultrasound, CartoConfig};
+//! use robot_model::time::Instant;
+//! let cfg = CartoConfig::default();
+//! let (mut pilot, mut motor) = (Pilot::new(&cfg), Motor::new(cfg.clone()));
+//! let (sensors, us) = (SensorState::default(), Ultrasound::new(30.0, cfg.distance_max_age));
+//! let now = Instant::ZERO;
+//! pilot.handle(now, Request::SetPose { x: 2, y: 3, direction: 3 }, &mut motor);
+//! // a cartography move without the sensor board cannot run: MOVE_DONE only
+//! pilot.handle(now, Request::Cartography { command: 0 }, &mut motor);
+//! pilot.poll(now, &mut motor, &sensors, &us, Health { sensor_board: false, motor_board: true });
+//! assert_eq!(pilot.take_replies(), vec![Reply::PositionReceived, Reply::MoveDone]);
+//! ```
+
+use std::collections::VecDeque;
+
+use robot_model::time::{Duration, Instant};
+
+use crate::CartoConfig;
+use crate::motor::Motor;
+use crate::pose::{GridPose, Heading};
+use crate::sensors::SensorState;
+use crate::ultrasound::{Check, Ultrasound};
+
+/// A request from Cute, in Carto's terms (raw command and direction bytes are kept so bad values
+/// can be reported).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Request {
+    /// `SEND_ROBOT_POSITION`.
+    SetPose {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+        /// Raw direction byte (0 S, 1 N, 2 W, 3 E).
+        direction: u8,
+    },
+    /// `SEND_MOVE_CARTOGRAPHY`.
+    Cartography {
+        /// Raw command byte (0 F, 1 R, 2 L, 3 STOP).
+        command: u8,
+    },
+    /// One `SEND_MOVES_TRAJECTORY` frame.
+    Trajectory {
+        /// Batch length this frame belongs to.
+        n_total: u8,
+        /// Raw command byte.
+        command: u8,
+    },
+    /// `STOP_ROBOT`.
+    Stop,
+    /// A message Carto does not act on (unknown id, or one that only Carto sends), by raw id.
+    Ignored {
+        /// Raw message id.
+        msg: u16,
+    },
+}
+
+/// A message for Cute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reply {
+    /// `ROBOT_POSITION_RECEIVED`.
+    PositionReceived,
+    /// `SET_OBSTACLE_POSITION`.
+    Obstacle {
+        /// Row of the blocked cell.
+        x: u8,
+        /// Column of the blocked cell.
+        y: u8,
+    },
+    /// `SET_ROBOT_POSITION`.
+    RobotPosition {
+        /// Row of the robot's new cell.
+        x: u8,
+        /// Column of the robot's new cell.
+        y: u8,
+    },
+    /// `MOVE_DONE`.
+    MoveDone,
+}
+
+/// Whether the boards are usable, as the caller sees them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Health {
+    /// The sensor board sends keep-state.
+    pub sensor_board: bool,
+    /// The motor board link is up.
+    pub motor_board: bool,
+}
+
+/// Counters kept by the pilot.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PilotCounters {
+    /// Moves (FORWARD/RIGHT/LEFT) completed within tolerance.
+    pub moves_done: u64,
+    /// Moves that could not run or failed.
+    pub moves_failed: u64,
+    /// `SET_OBSTACLE_POSITION` sent (or obstacles found without a pose).
+    pub obstacles: u64,
+    /// Bumper hits during a FORWARD.
+    pub bumps: u64,
+    /// Partial trajectory batches discarded by a different `n_total`.
+    pub batches_discarded: u64,
+    /// Requests with bad values (direction > 3, `n_total` 0, command > 3).
+    pub bad_values: u64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum TaskKind {
+    Cartography,
+    Trajectory,
+}
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Task {
+    kind: TaskKind,
+    commands: VecDeque<u8>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum MoveKind {
+    Forward,
+    Right,
+    Left,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stage {
+    /// Take the next command of the current task (or the next task).
+    Next,
+    /// Waiting (up to `distance_wait`) for fresh encoder and IMU readings before a move: just
+    /// after power-on, Cute's first command can arrive before the sensor board's first frames.
+    Waiting { mv: MoveKind, since: Instant },
+    /// Waiting for a distance reading taken at rest, before a FORWARD.
+    Checking { since: Instant },
+    /// A move runs on the motor controller.
+    Moving { kind: MoveKind, since: Instant },
+    /// Driving back after a bumper hit.
+    BackingOff,
+}
+
+/// The link session's state machine (see the module docs).
+#[derive(Debug, Clone)]
+pub struct Pilot {
+    distance_wait: Duration,
+    stale_after: Duration,
+    back_off: bool,
+    pose: Option<GridPose>,
+    batch: Option<(u8, Vec<u8>)>,
+    queue: VecDeque<Task>,
+    current: Option<Task>,
+    stage: Stage,
+    rest_since: Instant,
+    replies: Vec<Reply>,
+    counters: PilotCounters,
+}
+
+impl Pilot {
+    /// An idle pilot with no pose.
+    pub fn new(cfg: &CartoConfig) -> Self {
+        Pilot {
+            distance_wait: cfg.distance_wait,
+            stale_after: cfg.sensor_stale_after,
+            back_off: cfg.back_off_after_bump,
+            pose: None,
+            batch: None,
+            queue: VecDeque::new(),
+            current: None,
+            stage: Stage::Next,
+            rest_since: Instant::ZERO,
+            replies: Vec::new(),
+            counters: PilotCounters::default(),
+        }
+    }
+
+    /// The stored pose, if Cute sent one.
+    pub fn pose(&self) -> Option<GridPose> {
+        self.pose
+    }
+
+    /// Whether a task runs or waits.
+    pub fn is_busy(&self) -> bool {
+        self.current.is_some() || !self.queue.is_empty()
+    }
+
+    /// Commands waiting: the rest of the current task, queued tasks and a partial batch.
+    pub fn pending(&self) -> usize {
+        self.current.as_ref().map_or(0, |t| t.commands.len())
+            + self.queue.iter().map(|t| t.commands.len()).sum::<usize>()
+            + self.batch.as_ref().map_or(0, |(_, c)| c.len())
+    }
+
+    /// The pilot's counters.
+    pub fn counters(&self) -> PilotCounters {
+        self.counters
+    }
+
+    /// Replies produced since the last call, in order.
+    pub fn take_replies(&mut self) -> Vec<Reply> {
+        core::mem::take(&mut self.replies)
+    }
+
+    /// Handles one request from Cute.
+    pub fn handle(&mut self, now: Instant, req: Request, motor: &mut Motor) {
+        match req {
+            Request::SetPose { x, y, direction } => {
+                match Heading::from_wire(direction) {
+                    Some(heading) => {
+                        let pose = GridPose { x, y, heading };
+                        tracing::info!(%pose, "robot position received");
+                        // A new pose names a cell: the robot is taken to be at its centre. The
+                        // pose Carto already holds (Cute re-sends it after a reconnect) keeps the
+                        // dead-reckoned offset, e.g. of a FORWARD cut short by the disconnect, so
+                        // the next move still ends on a cell centre.
+                        if self.pose != Some(pose) {
+                            motor.reset_odometry();
+                        }
+                        self.pose = Some(pose);
+                    }
+                    None => {
+                        self.counters.bad_values += 1;
+                        tracing::warn!(
+                            x,
+                            y,
+                            direction,
+                            "robot position with an invalid direction: not stored"
+                        );
+                    }
+                }
+                self.replies.push(Reply::PositionReceived);
+            }
+            Request::Cartography { command } => {
+                self.queue
+                    .push_back(Task { kind: TaskKind::Cartography, commands: VecDeque::from([command]) });
+            }
+            Request::Trajectory { n_total, command } => self.trajectory_frame(n_total, command),
+            Request::Stop => {
+                tracing::info!(dropped = self.pending(), "stop: motors stopped, pending commands dropped");
+                self.drop_everything(now, motor);
+            }
+            Request::Ignored { msg } => {
+                tracing::debug!(msg = format_args!("{msg:#06x}"), "message ignored");
+            }
+        }
+    }
+
+    fn trajectory_frame(&mut self, n_total: u8, command: u8) {
+        if n_total == 0 {
+            self.counters.bad_values += 1;
+            tracing::warn!(command, "trajectory frame with n_total 0 ignored");
+            return;
+        }
+        let batch = match self.batch.take() {
+            Some((n, mut cmds)) if n == n_total => {
+                cmds.push(command);
+                (n, cmds)
+            }
+            Some((n, cmds)) => {
+                self.counters.batches_discarded += 1;
+                tracing::warn!(
+                    old = n,
+                    got = cmds.len(),
+                    new = n_total,
+                    "n_total changed: partial batch discarded"
+                );
+                (n_total, vec![command])
+            }
+            None => (n_total, vec![command]),
+        };
+        if batch.1.len() >= usize::from(batch.0) {
+            tracing::info!(n = batch.0, "trajectory batch complete");
+            self.queue.push_back(Task { kind: TaskKind::Trajectory, commands: batch.1.into() });
+        } else {
+            self.batch = Some(batch);
+        }
+    }
+
+    /// Stops the motors and forgets every pending command, the partial batch and unsent replies
+    /// (Cute went away).
+    pub fn on_disconnect(&mut self, now: Instant, motor: &mut Motor) {
+        self.drop_everything(now, motor);
+        self.replies.clear();
+    }
+
+    /// A board failed while a task may be running: the motors stop, the current move fails and
+    /// its task ends with `MOVE_DONE`. Queued tasks stay (they will fail in turn while the board
+    /// is down).
+    pub fn on_fault(&mut self, now: Instant, motor: &mut Motor, why: &str) {
+        motor.stop(now);
+        if matches!(self.stage, Stage::Next) {
+            return;
+        }
+        if self.current.is_some() {
+            tracing::warn!(why, "current move failed");
+            self.counters.moves_failed += 1;
+            self.end_task(now);
+        }
+    }
+
+    fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {
+        motor.stop(now);
+        self.queue.clear();
+        self.current = None;
+        self.batch = None;
+        self.stage = Stage::Next;
+        self.rest_since = now;
+    }
+
+    /// Ends the current task (completed or aborted): `MOVE_DONE`, back to the next task.
+    fn end_task(&mut self, now: Instant) {
+        self.current = None;
+        self.stage = Stage::Next;
+        self.rest_since = now;
+        self.replies.push(Reply::MoveDone);
+    }
+
+    fn fail(&mut self, now: Instant, why: &str) {
+        tracing::warn!(why, "move cannot run: task ends with MOVE_DONE only");
+        self.counters.moves_failed += 1;
+        self.end_task(now);
+    }
+
+    /// Runs pending work. `motor` must have been polled at `now` already (it holds the outcome of
+    /// a move that just ended).
+    pub fn poll(
+        &mut self,
+        now: Instant,
+        motor: &mut Motor,
+        sensors: &SensorState,
+        us: &Ultrasound,
+        health: Health,
+    ) {
+        // Bounded: each pass either waits (returns) or consumes a command or a task.
+        for _ in 0..1024 {
+            match self.stage {
+                Stage::Next => {
+                    if self.current.is_none() {
+                        match self.queue.pop_front() {
+                            Some(t) => self.current = Some(t),
+                            None => return,
+                        }
+                    }
+                    let Some(task) = self.current.as_mut() else {
+                        return;
+                    };
+                    let kind = task.kind;
+                    let Some(command) = task.commands.pop_front() else {
+                        self.end_task(now);
+                        continue;
+                    };
+                    self.start_command(now, kind, command, motor, sensors, health);
+                }
+                Stage::Waiting { mv, since } => {
+                    if self.readings_fresh(now, sensors) {
+                        self.begin_move(now, mv, motor, sensors);
+                    } else if now.saturating_since(since) >= self.distance_wait {
+                        self.fail(now, "no fresh encoder and IMU readings");
+                    } else {
+                        return;
+                    }
+                }
+                Stage::Checking { since } => {
+                    if !(health.sensor_board && health.motor_board) {
+                        self.fail(now, "a board is lost");
+                        continue;
+                    }
+                    let check = if sensors.bumper_pressed() {
+                        Check::Obstacle { cm: 0.0 }
+                    } else {
+                        us.check(now, self.rest_since)
+                    };
+                    match check {
+                        Check::Pending if now.saturating_since(since) >= self.distance_wait => {
+                            self.fail(now, "no distance reading taken at rest");
+                        }
+                        Check::Pending => return,
+                        Check::Obstacle { cm } => {
+                            tracing::info!(cm, "obstacle ahead: no motion");
+                            self.report_obstacle();
+                            self.end_task(now);
+                        }
+                        Check::Clear { cm } => {
+                            tracing::debug!(?cm, "path clear");
+                            match motor.start_next_cell(now, sensors).map(|_| ()) {
+                                Ok(()) => self.stage = Stage::Moving { kind: MoveKind::Forward, since: now },
+                                Err(e) => self.fail(now, &e.to_string()),
+                            }
+                        }
+                    }
+                }
+                Stage::Moving { kind, since } => {
+                    if kind == MoveKind::Forward && sensors.bumper_pressed_since(since) {
+                        self.bumped(now, motor, sensors);
+                        continue;
+                    }
+                    match motor.take_outcome() {
+                        None if motor.is_busy() => return,
+                        None => {
+                            // The move vanished (stopped from outside): treat as failed.
+                            self.counters.moves_failed += 1;
+                            self.end_task(now);
+                        }
+                        Some(Ok(())) => {
+                            self.counters.moves_done += 1;
+                            self.rest_since = now;
+                            self.move_succeeded(kind);
+                            self.stage = Stage::Next;
+                        }
+                        Some(Err(e)) => {
+                            tracing::warn!(error = %e, ?kind, "move failed: robot stopped");
+                            self.counters.moves_failed += 1;
+                            self.end_task(now);
+                        }
+                    }
+                }
+                Stage::BackingOff => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    None | Some(Ok(())) => self.end_task(now),
+                    Some(Err(e)) => {
+                        tracing::warn!(error = %e, "back-off after the bumper failed");
+                        self.end_task(now);
+                    }
+                },
+            }
+        }
+    }
+
+    fn start_command(
+        &mut self,
+        now: Instant,
+        kind: TaskKind,
+        command: u8,
+        motor: &mut Motor,
+        sensors: &SensorState,
+        health: Health,
+    ) {
+        let mv = match command {
+            0 => MoveKind::Forward,
+            1 => MoveKind::Right,
+            2 => MoveKind::Left,
+            other => {
+                self.counters.bad_values += 1;
+                match kind {
+                    TaskKind::Cartography => {
+                        tracing::warn!(command = other, "cartography command is not a move");
+                        self.counters.moves_failed += 1;
+                        self.end_task(now);
+                    }
+                    TaskKind::Trajectory => {
+                        tracing::warn!(command = other, "trajectory command is not a move: skipped");
+                    }
+                }
+                return;
+            }
+        };
+        if kind == TaskKind::Cartography && self.pose.is_none() {
+            return self.fail(now, "no robot position yet");
+        }
+        if mv == MoveKind::Forward && self.pose.is_some_and(|p| p.ahead().is_none()) {
+            return self.fail(now, "the cell ahead is off the grid");
+        }
+        if !health.motor_board {
+            return self.fail(now, "motor board lost");
+        }
+        if !health.sensor_board {
+            return self.fail(now, "sensor board lost");
+        }
+        if self.readings_fresh(now, sensors) {
+            self.begin_move(now, mv, motor, sensors);
+        } else {
+            self.stage = Stage::Waiting { mv, since: now };
+        }
+    }
+
+    /// Whether encoder counts and the IMU heading are both recent enough to start a move.
+    fn readings_fresh(&self, now: Instant, sensors: &SensorState) -> bool {
+        let fresh = |at: Instant| now.saturating_since(at) <= self.stale_after;
+        sensors.counts().is_some_and(|c| fresh(c.at)) && sensors.yaw_deg().is_some_and(|y| fresh(y.at))
+    }
+
+    fn begin_move(&mut self, now: Instant, mv: MoveKind, motor: &mut Motor, sensors: &SensorState) {
+        match mv {
+            MoveKind::Forward => self.stage = Stage::Checking { since: now },
+            MoveKind::Right | MoveKind::Left => match motor.start_turn(now, mv == MoveKind::Right, sensors) {
+                Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
+                Err(e) => self.fail(now, &e.to_string()),
+            },
+        }
+    }
+
+    fn move_succeeded(&mut self, kind: MoveKind) {
+        let Some(pose) = self.pose.as_mut() else {
+            return;
+        };
+        match kind {
+            MoveKind::Forward => {
+                if let Some((x, y)) = pose.ahead() {
+                    pose.x = x;
+                    pose.y = y;
+                    self.replies.push(Reply::RobotPosition { x, y });
+                }
+            }
+            MoveKind::Right => pose.heading = pose.heading.turned_right(),
+            MoveKind::Left => pose.heading = pose.heading.turned_left(),
+        }
+        tracing::info!(pose = %pose, "move done");
+    }
+
+    fn report_obstacle(&mut self) {
+        self.counters.obstacles += 1;
+        match self.pose.and_then(|p| p.ahead()) {
+            Some((x, y)) => self.replies.push(Reply::Obstacle { x, y }),
+            None => tracing::info!("obstacle ahead, but no robot position to report it against"),
+        }
+    }
+
+    fn bumped(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+        motor.stop(now);
+        self.counters.bumps += 1;
+        tracing::warn!(travelled_m = ?motor.travelled_m(sensors), "bumper pressed during FORWARD: stopped");
+        self.report_obstacle();
+        if self.back_off {
+            match motor.start_return(now, sensors) {
+                Ok(()) => {
+                    self.stage = Stage::BackingOff;
+                    return;
+                }
+                Err(e) => tracing::warn!(error = %e, "cannot back off"),
+            }
+        }
+        self.end_task(now);
+    }
+}

@@ -1,0 +1,415 @@
+//! [`CartoRuntime`]: the pump between [`Carto`] and real (or in-memory) links.
+//!
+//! Concept: generic over the transport traits, so the lockstep simulator (in-memory links, virtual
+//! clock) and the `carto` binary (TCP + serial ports, wall clock) run the very same code. One
+//! [`CartoRuntime::step`] at `now`:
+//! 1. accepts waiting clients — the first becomes the session, any other while one is connected is
+//!    accepted and dropped at once with a log line (Cute reconnects with back-off by itself);
+//! 2. reads everything waiting on the client and both boards and feeds it to Carto;
+//! 3. polls Carto;
+//! 4. writes Carto's output, keeping what a link did not take for the next step;
+//! 5. closes the client after a fatal framing error.
+//!
+//! Errors: a client error or disconnect ends the session (`on_client_disconnected`: motors stop);
+//! a board link reporting [`transport::ErrorKind::Disconnected`] is dropped
+//! (`on_*_link_lost`: motors considered stopped, moves refused) and reported in
+//! [`StepReport`]; other board I/O errors are logged and counted and the link is kept.
+//!
+//! Invariants: nothing here reads a clock; unsent motor bytes never pile up beyond
+//! [`MAX_BOARD_BACKLOG`] (older drive frames are worthless, the next one supersedes them).
+//!
+//! ```no_run
+//! # fn demo<L: transport::Listener, M: transport::Link, S: transport::Link>(listener: L, motor: M, sensor: S) {
+//! use carto::{Carto, CartoConfig, CartoRuntime};
+//! use robot_model::time::Instant;
+//! let mut rt = CartoRuntime::new(Carto::new(CartoConfig::default()), listener, motor, sensor);
+//! rt.step(Instant::from_millis(1));
+//! # }
+//! ```
+
+use robot_model::time::Instant;
+use transport::{Link, LinkError, Listener};
+
+use crate::Carto;
+
+/// Unsent bytes kept per board link before the backlog is dropped.
+pub const MAX_BOARD_BACKLOG: usize = 4096;
+/// Unsent bytes kept for the client before it is considered stuck and closed.
+pub const MAX_CLIENT_BACKLOG: usize = 64 * 1024;
+const READ_CHUNK: usize = 1024;
+const MAX_READS_PER_STEP: usize = 64;
+
+/// What happened during one [`CartoRuntime::step`] that the caller may act on.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct StepReport {
+    /// A client was accepted (its address).
+    pub accepted: Option<String>,
+    /// Clients refused because one was connected.
+    pub refused: u32,
+    /// The client session ended.
+    pub client_closed: bool,
+    /// The motor board link was lost in this step.
+    pub motor_lost: bool,
+    /// The sensor board link was lost in this step.
+    pub sensor_lost: bool,
+}
+
+/// Counters kept by the runtime.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RuntimeStats {
+    /// Clients refused (a session was open).
+    pub refused: u64,
+    /// Accept errors.
+    pub accept_errors: u64,
+    /// Board I/O errors other than disconnects.
+    pub board_io_errors: u64,
+    /// Bytes dropped from a board backlog.
+    pub board_bytes_dropped: u64,
+    /// Bytes read from / written to the client.
+    pub client_bytes_in: u64,
+    /// Bytes written to the client.
+    pub client_bytes_out: u64,
+    /// Bytes read from the motor board.
+    pub motor_bytes_in: u64,
+    /// Bytes written to the motor board.
+    pub motor_bytes_out: u64,
+    /// Bytes read from the sensor board.
+    pub sensor_bytes_in: u64,
+    /// Bytes written to the sensor board.
+    pub sensor_bytes_out: u64,
+}
+
+struct Client<C> {
+    link: C,
+    peer: String,
+    out: Vec<u8>,
+}
+
+/// Carto plus its links (see the module docs).
+pub struct CartoRuntime<L: Listener, M: Link, S: Link> {
+    carto: Carto,
+    listener: L,
+    client: Option<Client<L::Link>>,
+    motor: Option<M>,
+    sensor: Option<S>,
+    motor_out: Vec<u8>,
+    sensor_out: Vec<u8>,
+    stats: RuntimeStats,
+    buf: Vec<u8>,
+}
+
+impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
+    /// A runtime serving clients from `listener`, driving `motor` and `sensor`.
+    pub fn new(carto: Carto, listener: L, motor: M, sensor: S) -> Self {
+        CartoRuntime {
+            carto,
+            listener,
+            client: None,
+            motor: Some(motor),
+            sensor: Some(sensor),
+            motor_out: Vec::new(),
+            sensor_out: Vec::new(),
+            stats: RuntimeStats::default(),
+            buf: vec![0; READ_CHUNK],
+        }
+    }
+
+    /// The controller.
+    pub fn carto(&self) -> &Carto {
+        &self.carto
+    }
+
+    /// The controller, mutably (e.g. to stop it).
+    pub fn carto_mut(&mut self) -> &mut Carto {
+        &mut self.carto
+    }
+
+    /// The motor board link, while it is up (e.g. to read a wrapper's counters).
+    pub fn motor_link(&self) -> Option<&M> {
+        self.motor.as_ref()
+    }
+
+    /// The sensor board link, while it is up.
+    pub fn sensor_link(&self) -> Option<&S> {
+        self.sensor.as_ref()
+    }
+
+    /// The runtime's counters.
+    pub fn stats(&self) -> RuntimeStats {
+        self.stats
+    }
+
+    /// Whether a client session is open.
+    pub fn has_client(&self) -> bool {
+        self.client.is_some()
+    }
+
+    /// Whether the motor board link is still up.
+    pub fn motor_up(&self) -> bool {
+        self.motor.is_some()
+    }
+
+    /// Whether the sensor board link is still up.
+    pub fn sensor_up(&self) -> bool {
+        self.sensor.is_some()
+    }
+
+    /// One pump cycle at `now`.
+    pub fn step(&mut self, now: Instant) -> StepReport {
+        let mut report = StepReport::default();
+        self.accept(now, &mut report);
+        self.read_client(now, &mut report);
+        self.read_boards(now, &mut report);
+        self.carto.poll(now);
+        self.write_all(now, &mut report);
+        if self.client.is_some() && self.carto.should_close_client() {
+            self.close_client(now, "protocol error", &mut report);
+        }
+        report
+    }
+
+    /// Stops the motors and pushes the zero drive out as far as the link takes it (Ctrl-C,
+    /// shutdown). Returns whether every queued motor byte was written.
+    pub fn stop_motors(&mut self, now: Instant) -> bool {
+        // A disconnect stops the motors and drops everything pending.
+        if let Some(c) = self.client.take() {
+            tracing::info!(peer = %c.peer, "closing client connection: shutting down");
+        }
+        self.carto.on_client_disconnected(now);
+        let mut report = StepReport::default();
+        self.write_all(now, &mut report);
+        self.motor_out.is_empty()
+    }
+
+    /// Writes what is still queued for every link, without reading or polling. Returns whether
+    /// nothing is left for the motor board.
+    pub fn flush(&mut self, now: Instant) -> bool {
+        let mut report = StepReport::default();
+        self.write_all(now, &mut report);
+        self.motor_out.is_empty()
+    }
+
+    /// Closes the client session (e.g. on shutdown).
+    pub fn close_client(&mut self, now: Instant, why: &str, report: &mut StepReport) {
+        if let Some(mut c) = self.client.take() {
+            // One last attempt to deliver what was already answered.
+            if !c.out.is_empty() {
+                let _ = c.link.write(&c.out);
+            }
+            tracing::info!(peer = %c.peer, why, "closing client connection");
+            report.client_closed = true;
+            self.carto.on_client_disconnected(now);
+        }
+    }
+
+    fn accept(&mut self, now: Instant, report: &mut StepReport) {
+        for _ in 0..16 {
+            match self.listener.accept() {
+                Ok(Some((link, peer))) => {
+                    if let Some(current) = &self.client {
+                        self.stats.refused += 1;
+                        report.refused += 1;
+                        tracing::warn!(peer = %peer, current = %current.peer, "second client refused: one at a time");
+                        drop(link);
+                    } else {
+                        self.carto.on_client_connected(now, &peer);
+                        report.accepted = Some(peer.clone());
+                        self.client = Some(Client { link, peer, out: Vec::new() });
+                    }
+                }
+                Ok(None) => break,
+                Err(e) => {
+                    self.stats.accept_errors += 1;
+                    tracing::warn!(error = %e, kind = ?e.kind(), "accept failed");
+                    break;
+                }
+            }
+        }
+    }
+
+    fn read_client(&mut self, now: Instant, report: &mut StepReport) {
+        let Some(client) = self.client.as_mut() else {
+            return;
+        };
+        let mut failure = None;
+        for _ in 0..MAX_READS_PER_STEP {
+            match client.link.read(&mut self.buf) {
+                Ok(0) => break,
+                Ok(n) => {
+                    self.stats.client_bytes_in += n as u64;
+                    self.carto.on_client_bytes(now, &self.buf[..n]);
+                    if self.carto.should_close_client() {
+                        break;
+                    }
+                }
+                Err(e) => {
+                    failure = Some(if e.kind() == transport::ErrorKind::Disconnected {
+                        "peer closed the connection".to_owned()
+                    } else {
+                        format!("read error: {e}")
+                    });
+                    break;
+                }
+            }
+        }
+        if let Some(why) = failure {
+            self.close_client(now, &why, report);
+        }
+    }
+
+    fn read_boards(&mut self, now: Instant, report: &mut StepReport) {
+        if let Some(link) = self.motor.as_mut() {
+            match read_into(link, &mut self.buf, &mut self.stats.motor_bytes_in, |b| {
+                self.carto.on_motor_bytes(now, b)
+            }) {
+                ReadEnd::Ok => {}
+                ReadEnd::Lost(e) => {
+                    tracing::error!(error = %e, "motor board link lost");
+                    self.motor = None;
+                    self.motor_out.clear();
+                    report.motor_lost = true;
+                    self.carto.on_motor_link_lost(now);
+                }
+                ReadEnd::Error(e) => {
+                    self.stats.board_io_errors += 1;
+                    tracing::warn!(error = %e, "motor board read error");
+                }
+            }
+        }
+        if let Some(link) = self.sensor.as_mut() {
+            match read_into(link, &mut self.buf, &mut self.stats.sensor_bytes_in, |b| {
+                self.carto.on_sensor_bytes(now, b)
+            }) {
+                ReadEnd::Ok => {}
+                ReadEnd::Lost(e) => {
+                    tracing::error!(error = %e, "sensor board link lost");
+                    self.sensor = None;
+                    self.sensor_out.clear();
+                    report.sensor_lost = true;
+                    self.carto.on_sensor_link_lost(now);
+                }
+                ReadEnd::Error(e) => {
+                    self.stats.board_io_errors += 1;
+                    tracing::warn!(error = %e, "sensor board read error");
+                }
+            }
+        }
+    }
+
+    fn write_all(&mut self, now: Instant, report: &mut StepReport) {
+        // Client.
+        let bytes = self.carto.take_client_bytes();
+        let mut client_failure = None;
+        if let Some(c) = self.client.as_mut() {
+            c.out.extend(bytes);
+            match write_some(&mut c.link, &mut c.out) {
+                Ok(n) => self.stats.client_bytes_out += n as u64,
+                Err(e) => client_failure = Some(format!("write error: {e}")),
+            }
+            if client_failure.is_none() && c.out.len() > MAX_CLIENT_BACKLOG {
+                client_failure = Some(format!("client not reading ({} bytes pending)", c.out.len()));
+            }
+        }
+        if let Some(why) = client_failure {
+            if let Some(c) = self.client.as_mut() {
+                c.out.clear();
+            }
+            self.close_client(now, &why, report);
+        }
+
+        // Motor board.
+        let bytes = self.carto.take_motor_bytes();
+        if let Some(link) = self.motor.as_mut() {
+            match push(link, &mut self.motor_out, bytes, &mut self.stats) {
+                Ok(n) => self.stats.motor_bytes_out += n as u64,
+                Err(e) if e.kind() == transport::ErrorKind::Disconnected => {
+                    tracing::error!(error = %e, "motor board link lost");
+                    self.motor = None;
+                    self.motor_out.clear();
+                    report.motor_lost = true;
+                    self.carto.on_motor_link_lost(now);
+                }
+                Err(e) => {
+                    self.stats.board_io_errors += 1;
+                    tracing::warn!(error = %e, "motor board write error");
+                }
+            }
+        }
+
+        // Sensor board.
+        let bytes = self.carto.take_sensor_bytes();
+        if let Some(link) = self.sensor.as_mut() {
+            match push(link, &mut self.sensor_out, bytes, &mut self.stats) {
+                Ok(n) => self.stats.sensor_bytes_out += n as u64,
+                Err(e) if e.kind() == transport::ErrorKind::Disconnected => {
+                    tracing::error!(error = %e, "sensor board link lost");
+                    self.sensor = None;
+                    self.sensor_out.clear();
+                    report.sensor_lost = true;
+                    self.carto.on_sensor_link_lost(now);
+                }
+                Err(e) => {
+                    self.stats.board_io_errors += 1;
+                    tracing::warn!(error = %e, "sensor board write error");
+                }
+            }
+        }
+    }
+}
+
+enum ReadEnd<E> {
+    Ok,
+    Lost(E),
+    Error(E),
+}
+
+fn read_into<K: Link>(
+    link: &mut K,
+    buf: &mut [u8],
+    counter: &mut u64,
+    mut feed: impl FnMut(&[u8]),
+) -> ReadEnd<K::Error> {
+    for _ in 0..MAX_READS_PER_STEP {
+        match link.read(buf) {
+            Ok(0) => return ReadEnd::Ok,
+            Ok(n) => {
+                *counter += n as u64;
+                feed(&buf[..n.min(buf.len())]);
+            }
+            Err(e) if e.kind() == transport::ErrorKind::Disconnected => return ReadEnd::Lost(e),
+            Err(e) => return ReadEnd::Error(e),
+        }
+    }
+    ReadEnd::Ok
+}
+
+/// Writes as much of `pending` as the link takes, removing it from the front.
+fn write_some<K: Link>(link: &mut K, pending: &mut Vec<u8>) -> Result<usize, K::Error> {
+    let mut total = 0;
+    while !pending.is_empty() {
+        let n = link.write(pending)?;
+        if n == 0 {
+            break;
+        }
+        let n = n.min(pending.len());
+        pending.drain(..n);
+        total += n;
+    }
+    Ok(total)
+}
+
+fn push<K: Link>(
+    link: &mut K,
+    pending: &mut Vec<u8>,
+    new: Vec<u8>,
+    stats: &mut RuntimeStats,
+) -> Result<usize, K::Error> {
+    if pending.len() + new.len() > MAX_BOARD_BACKLOG {
+        // Stale commands are worse than none: keep only the newest output.
+        stats.board_bytes_dropped += pending.len() as u64;
+        tracing::warn!(dropped = pending.len(), "board link backlog dropped");
+        pending.clear();
+    }
+    pending.extend(new);
+    write_some(link, pending)
+}

@@ -1,0 +1,566 @@
+//! What Carto knows from the boards: the latest IMU heading, wheel encoder counts, motor
+//! telemetry and bumper state, each stamped with the time it arrived, plus the keep-state session
+//! with the sensor board.
+//!
+//! Concept: readings arrive at a few hertz (encoders 5 Hz, NavX 10 Hz) while the controller runs
+//! every millisecond, so [`SensorState`] also *extrapolates*: a wheel's count now = last count +
+//! its rate × the time since (rate from fresh motor telemetry, else from its last two counts),
+//! capped at [`CartoConfig::max_extrapolation`]. The same for the heading.
+//!
+//! Invariants:
+//! - the heading is kept as an *unwrapped* counter-clockwise yaw in degrees (the NavX reports
+//!   0–360 clockwise; each new sample adds the shortest signed difference), so targets never wrap;
+//! - wheels are indexed FL, FR, RL, RR (sensor ids 1–4); a count grows when the wheel rolls
+//!   forward.
+//!
+//! ```
+//! use carto::sensors::{SensorEvent, SensorState};
+//! use carto::CartoConfig;
+//! use robot_model::time::Instant;
+//! let cfg = CartoConfig::default();
+//! let mut s = SensorState::default();
+//! s.ingest(Instant::from_millis(0), SensorEvent::Heading { cw_deg: 350.0 });
+//! s.ingest(Instant::from_millis(100), SensorEvent::Heading { cw_deg: 10.0 });
+//! // 350° → 10° is 20° clockwise, i.e. −20° counter-clockwise (not +340°): −350° → −370°
+//! assert_eq!(s.yaw_deg().unwrap().value, -370.0);
+//! // the yaw rate from the last two samples is −200°/s; 50 ms later the prediction is −380°
+//! assert!((s.predicted_yaw(Instant::from_millis(150), &cfg).unwrap() + 380.0).abs() < 1e-9);
+//! ```
+
+use robot_model::time::{Duration, Instant};
+
+use crate::CartoConfig;
+
+/// A value and the time it arrived.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stamped<T> {
+    /// The value.
+    pub value: T,
+    /// When it arrived.
+    pub at: Instant,
+}
+
+/// One decoded message from the sensor or motor board, in Carto's terms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SensorEvent {
+    /// Keep-state from the sensor board.
+    KeepState {
+        /// Status byte (the board sends 1).
+        status: u8,
+        /// Sequence number.
+        sequence: u16,
+    },
+    /// NavX fused heading, degrees clockwise, 0–360.
+    Heading {
+        /// Degrees, clockwise.
+        cw_deg: f64,
+    },
+    /// A wheel encoder count.
+    Encoder {
+        /// 0 = FL, 1 = FR, 2 = RL, 3 = RR.
+        wheel: usize,
+        /// Cumulative count, growing forward.
+        count: i32,
+    },
+    /// The front distance sensor, cm; negative = no echo.
+    Distance {
+        /// Centimetres.
+        cm: f32,
+    },
+    /// The front bumper.
+    Bumper {
+        /// Whether it is pressed.
+        pressed: bool,
+    },
+    /// Motor board telemetry: wheel speeds in rpm, FL, FR, RL, RR.
+    WheelRpm {
+        /// Rpm per wheel, positive forward.
+        rpm: [f32; 4],
+    },
+    /// A reading whose sensor reported an error status, or a sensor Carto does not use.
+    Ignored,
+}
+
+/// The latest readings of every sensor Carto uses, with extrapolation.
+#[derive(Debug, Clone, Default)]
+pub struct SensorState {
+    yaw: Option<Stamped<f64>>,
+    prev_yaw: Option<Stamped<f64>>,
+    last_cw: f64,
+    encoders: [Option<Stamped<i32>>; 4],
+    prev_encoders: [Option<Stamped<i32>>; 4],
+    rpm: Option<Stamped<[f32; 4]>>,
+    bumper: Option<Stamped<bool>>,
+    drift: DriftEstimate,
+}
+
+/// The IMU's slow heading drift, estimated against the wheel odometry's heading.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct DriftEstimate {
+    /// (IMU yaw − wheel yaw) when the estimate was anchored, degrees.
+    anchor: Option<f64>,
+    /// Estimated drift of the IMU since the anchor, degrees (subtracted from its readings).
+    drift_deg: f64,
+    /// Time of the IMU sample last used.
+    last: Option<Instant>,
+}
+
+impl SensorState {
+    /// Records one event received at `now`. Distance and keep-state are handled elsewhere.
+    pub fn ingest(&mut self, now: Instant, event: SensorEvent) {
+        match event {
+            SensorEvent::Heading { cw_deg } if cw_deg.is_finite() => {
+                let yaw = match self.yaw {
+                    None => -cw_deg,
+                    Some(prev) => prev.value - wrap180(cw_deg - self.last_cw),
+                };
+                self.last_cw = cw_deg;
+                self.prev_yaw = self.yaw;
+                self.yaw = Some(Stamped { value: yaw, at: now });
+            }
+            SensorEvent::Encoder { wheel, count } if wheel < 4 => {
+                self.prev_encoders[wheel] = self.encoders[wheel];
+                self.encoders[wheel] = Some(Stamped { value: count, at: now });
+            }
+            SensorEvent::WheelRpm { rpm } if rpm.iter().all(|r| r.is_finite()) => {
+                self.rpm = Some(Stamped { value: rpm, at: now });
+            }
+            SensorEvent::Bumper { pressed } => self.bumper = Some(Stamped { value: pressed, at: now }),
+            _ => {}
+        }
+    }
+
+    /// The last heading as an unwrapped counter-clockwise yaw, degrees, with the estimated IMU
+    /// drift removed (see [`SensorState::estimate_imu_drift`]).
+    pub fn yaw_deg(&self) -> Option<Stamped<f64>> {
+        self.yaw.map(|y| Stamped { value: y.value - self.drift.drift_deg, at: y.at })
+    }
+
+    /// The IMU drift currently removed from its readings, degrees counter-clockwise.
+    pub fn imu_drift_deg(&self) -> f64 {
+        self.drift.drift_deg
+    }
+
+    /// The heading the wheels alone give, degrees counter-clockwise from where the counts were
+    /// zero: mecanum forward kinematics, (−FL + FR − RL + RR) / (4 · lever). `None` until all four
+    /// wheels reported.
+    pub fn wheel_yaw_deg(&self, cfg: &CartoConfig) -> Option<f64> {
+        let [fl, fr, rl, rr] = self.counts()?.value.map(f64::from);
+        Some(
+            ((-fl + fr - rl + rr) / 4.0 / cfg.encoder_counts_per_metre() / cfg.rotation_lever_m())
+                .to_degrees(),
+        )
+    }
+
+    /// Updates the IMU drift estimate (call every poll; a no-op unless a new IMU sample arrived).
+    ///
+    /// The difference between the IMU heading and the wheels' heading is constant while neither
+    /// drifts nor slips; its slow change is taken to be IMU drift (a NavX drifts about 0.5°/min).
+    /// It is sampled only while the robot is not turning (both rates under 3°/s), low-pass
+    /// filtered with [`CartoConfig::imu_drift_tau_s`], and the estimate moves at most
+    /// [`CartoConfig::imu_drift_max_deg_per_min`], so wheel slip (a collision, a turn) can only
+    /// pull it slowly. A jump of more than 10° (counters reset) re-anchors it.
+    pub fn estimate_imu_drift(&mut self, now: Instant, cfg: &CartoConfig) {
+        if cfg.imu_drift_tau_s <= 0.0 {
+            return;
+        }
+        let (Some(y), Some(wheel)) = (self.yaw, self.wheel_yaw_deg(cfg)) else {
+            return;
+        };
+        if self.drift.last.is_some_and(|t| y.at <= t) {
+            return;
+        }
+        let imu_rate = match self.prev_yaw {
+            Some(a) if y.at > a.at => (y.value - a.value) / (y.at - a.at).as_secs_f64(),
+            _ => 0.0,
+        };
+        let rates: [f64; 4] = core::array::from_fn(|i| self.wheel_rate_cps(i, now, cfg));
+        let [fl, fr, rl, rr] = rates;
+        let wheel_rate =
+            ((-fl + fr - rl + rr) / 4.0 / cfg.encoder_counts_per_metre() / cfg.rotation_lever_m())
+                .to_degrees();
+        if imu_rate.abs() > 3.0 || wheel_rate.abs() > 3.0 {
+            return;
+        }
+        let diff = y.value - wheel;
+        let dt = self.drift.last.map_or(0.0, |t| (y.at - t).as_secs_f64().min(1.0));
+        self.drift.last = Some(y.at);
+        let Some(anchor) = self.drift.anchor else {
+            self.drift.anchor = Some(diff - self.drift.drift_deg);
+            return;
+        };
+        let seen = diff - anchor;
+        if (seen - self.drift.drift_deg).abs() > 10.0 {
+            tracing::warn!(seen, "imu and wheel headings jumped apart: drift estimate re-anchored");
+            self.drift.anchor = Some(diff - self.drift.drift_deg);
+            return;
+        }
+        let max_step = cfg.imu_drift_max_deg_per_min / 60.0 * dt;
+        let step = ((seen - self.drift.drift_deg) * dt / cfg.imu_drift_tau_s).clamp(-max_step, max_step);
+        self.drift.drift_deg += step;
+    }
+
+    /// The last count of every wheel, with the time of the oldest of them; `None` until all four
+    /// wheels have reported.
+    pub fn counts(&self) -> Option<Stamped<[i32; 4]>> {
+        let mut out = [0; 4];
+        let mut oldest: Option<Instant> = None;
+        for (i, e) in self.encoders.iter().enumerate() {
+            let e = (*e)?;
+            out[i] = e.value;
+            oldest = Some(oldest.map_or(e.at, |o| o.min(e.at)));
+        }
+        Some(Stamped { value: out, at: oldest? })
+    }
+
+    /// The earliest arrival time among the last samples of all four wheels.
+    pub fn counts_since(&self) -> Option<Instant> {
+        self.counts().map(|c| c.at)
+    }
+
+    /// Whether the bumper's latest report, received at or after `since`, says pressed.
+    pub fn bumper_pressed_since(&self, since: Instant) -> bool {
+        matches!(self.bumper, Some(b) if b.value && b.at >= since)
+    }
+
+    /// Whether the bumper's latest report says pressed.
+    pub fn bumper_pressed(&self) -> bool {
+        matches!(self.bumper, Some(b) if b.value)
+    }
+
+    fn fresh_rpm(&self, now: Instant, cfg: &CartoConfig) -> Option<[f32; 4]> {
+        self.rpm.filter(|r| now.saturating_since(r.at) <= cfg.telemetry_fresh).map(|r| r.value)
+    }
+
+    /// Rate of a wheel's count, counts per second: from fresh telemetry, else from its last two
+    /// encoder samples, else zero.
+    pub fn wheel_rate_cps(&self, wheel: usize, now: Instant, cfg: &CartoConfig) -> f64 {
+        if let Some(rpm) = self.fresh_rpm(now, cfg) {
+            return f64::from(rpm[wheel.min(3)]) * cfg.encoder_counts_per_wheel_rev / 60.0;
+        }
+        match (self.prev_encoders.get(wheel).copied().flatten(), self.encoders.get(wheel).copied().flatten())
+        {
+            (Some(a), Some(b)) if b.at > a.at && b.at - a.at <= Duration::from_millis(1000) => {
+                f64::from(b.value.wrapping_sub(a.value)) / (b.at - a.at).as_secs_f64()
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// Every wheel's count extrapolated to `now`, as floats; `None` until all four reported.
+    pub fn predicted_counts(&self, now: Instant, cfg: &CartoConfig) -> Option<[f64; 4]> {
+        let mut out = [0.0; 4];
+        for (i, e) in self.encoders.iter().enumerate() {
+            let e = (*e)?;
+            let dt = now.saturating_since(e.at).min(cfg.max_extrapolation).as_secs_f64();
+            out[i] = f64::from(e.value) + self.wheel_rate_cps(i, now, cfg) * dt;
+        }
+        Some(out)
+    }
+
+    /// Mean forward speed of the four wheels, m/s (signed).
+    pub fn forward_speed_mps(&self, now: Instant, cfg: &CartoConfig) -> f64 {
+        let sum: f64 = (0..4).map(|i| self.wheel_rate_cps(i, now, cfg)).sum();
+        sum / 4.0 / cfg.encoder_counts_per_metre()
+    }
+
+    /// Yaw rate, degrees per second counter-clockwise: from fresh telemetry (mecanum inverse
+    /// kinematics), else from the last two NavX samples, else zero.
+    pub fn yaw_rate_dps(&self, now: Instant, cfg: &CartoConfig) -> f64 {
+        if let Some(rpm) = self.fresh_rpm(now, cfg) {
+            let [fl, fr, rl, rr] = rpm.map(f64::from);
+            let rim = (-fl + fr - rl + rr) / 4.0 / 60.0 * 2.0 * core::f64::consts::PI * cfg.wheel_radius_m;
+            return (rim / cfg.rotation_lever_m()).to_degrees();
+        }
+        match (self.prev_yaw, self.yaw) {
+            (Some(a), Some(b)) if b.at > a.at && b.at - a.at <= Duration::from_millis(1000) => {
+                (b.value - a.value) / (b.at - a.at).as_secs_f64()
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// The yaw extrapolated to `now`, degrees counter-clockwise (unwrapped).
+    pub fn predicted_yaw(&self, now: Instant, cfg: &CartoConfig) -> Option<f64> {
+        let y = self.yaw_deg()?;
+        let dt = now.saturating_since(y.at).min(cfg.max_extrapolation).as_secs_f64();
+        Some(y.value + self.yaw_rate_dps(now, cfg) * dt)
+    }
+
+    /// Forgets every reading (used when the sensor board is lost). The IMU drift estimate is
+    /// kept and re-anchored on the next readings.
+    pub fn clear(&mut self) {
+        let drift = DriftEstimate { anchor: None, last: None, ..self.drift };
+        *self = SensorState { drift, ..SensorState::default() };
+    }
+}
+
+/// Wraps an angle in degrees into (−180, 180].
+pub fn wrap180(deg: f64) -> f64 {
+    let mut a = deg % 360.0;
+    if a > 180.0 {
+        a -= 360.0;
+    } else if a <= -180.0 {
+        a += 360.0;
+    }
+    a
+}
+
+/// Estimates when a frame's content was sampled from when it finished arriving on a serial line.
+///
+/// A board samples its sensors and writes all due frames at once; on a slow line (9600 baud is
+/// 960 bytes/s) the last frame of such a burst arrives up to ~100 ms after the sample. Stamping a
+/// reading with its arrival time would make every estimate lag by that much (a turn at 30°/s
+/// overshoots by ~1.5°). So: a frame of `len` bytes that completed at `arrived` started at
+/// `arrived − len × 10 / baud`; if it started right when the previous frame ended (within two
+/// byte times or 2 ms), it was queued behind it and belongs to the same burst, so it gets the
+/// burst's start as its time; otherwise it starts a new burst. A burst longer than 150 ms is cut
+/// (a saturated line must not freeze the clock). Baud 0 disables the correction.
+#[derive(Debug, Clone)]
+pub struct LineTimer {
+    byte_micros: f64,
+    last_end: Option<Instant>,
+    burst_start: Instant,
+}
+
+impl LineTimer {
+    /// A timer for a line at `baud` (8N1: ten bits per byte); 0 = arrival time as is.
+    pub fn new(baud: u32) -> Self {
+        let byte_micros = if baud == 0 { 0.0 } else { 10.0e6 / f64::from(baud) };
+        LineTimer { byte_micros, last_end: None, burst_start: Instant::ZERO }
+    }
+
+    /// The estimated sampling time of a `len`-byte frame that completed at `arrived`.
+    pub fn sampled_at(&mut self, arrived: Instant, len: usize) -> Instant {
+        if self.byte_micros == 0.0 {
+            return arrived;
+        }
+        let tx = Duration::from_micros((len as f64 * self.byte_micros).round() as u64);
+        let start = arrived - tx;
+        let slack = Duration::from_micros(((2.0 * self.byte_micros) as u64).max(2000));
+        let queued = self.last_end.is_some_and(|end| start <= end + slack);
+        if !queued || arrived.saturating_since(self.burst_start) > Duration::from_millis(150) {
+            self.burst_start = start;
+        }
+        self.last_end = Some(self.last_end.map_or(arrived, |e| e.max(arrived)));
+        self.burst_start
+    }
+}
+
+/// A change in the sensor board's liveness.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PeerEvent {
+    /// No keep-state for [`CartoConfig::peer_lost_after`].
+    Lost,
+    /// Keep-state heard again after a loss.
+    Back,
+}
+
+/// The keep-state session with the sensor board: Carto's own 2 Hz keep-state (status 2, sequence
+/// from 1, wrapping to 0 after 0xFFFF) and the board's liveness.
+#[derive(Debug, Clone)]
+pub struct KeepState {
+    period: Duration,
+    lost_after: Duration,
+    next_seq: u16,
+    next_send: Option<Instant>,
+    watch_since: Option<Instant>,
+    last_heard: Option<Instant>,
+    lost: bool,
+}
+
+impl KeepState {
+    /// A session that sends every `period` and declares the peer lost after `lost_after`.
+    pub fn new(period: Duration, lost_after: Duration) -> Self {
+        KeepState {
+            period,
+            lost_after,
+            next_seq: 1,
+            next_send: None,
+            watch_since: None,
+            last_heard: None,
+            lost: false,
+        }
+    }
+
+    /// Records a keep-state from the board; returns [`PeerEvent::Back`] after a loss.
+    pub fn heard(&mut self, now: Instant) -> Option<PeerEvent> {
+        self.last_heard = Some(now);
+        if self.lost {
+            self.lost = false;
+            return Some(PeerEvent::Back);
+        }
+        None
+    }
+
+    /// Whether the board currently counts as lost.
+    pub fn is_lost(&self) -> bool {
+        self.lost
+    }
+
+    /// Marks the board lost at once (its link went away).
+    pub fn force_lost(&mut self) -> bool {
+        let was = self.lost;
+        self.lost = true;
+        !was
+    }
+
+    /// Advances the session: a sequence number to send now, and a liveness change if any.
+    pub fn poll(&mut self, now: Instant) -> (Option<u16>, Option<PeerEvent>) {
+        let mut send = None;
+        let due = self.next_send.is_none_or(|t| now >= t);
+        if due {
+            send = Some(self.next_seq);
+            self.next_seq = self.next_seq.wrapping_add(1);
+            // Keep a fixed cadence; if the caller fell far behind, restart it from now.
+            let base = match self.next_send {
+                Some(t) if now.saturating_since(t) < self.period => t,
+                _ => now,
+            };
+            self.next_send = Some(base + self.period);
+        }
+        let since = *self.watch_since.get_or_insert(now);
+        let reference = self.last_heard.unwrap_or(since);
+        let mut event = None;
+        if !self.lost && now.saturating_since(reference) >= self.lost_after {
+            self.lost = true;
+            event = Some(PeerEvent::Lost);
+        }
+        (send, event)
+    }
+
+    /// The next time `poll` has something to do.
+    pub fn next_deadline(&self) -> Option<Instant> {
+        self.next_send
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ms(v: u64) -> Instant {
+        Instant::from_millis(v)
+    }
+
+    #[test]
+    fn imu_drift_at_rest_is_learnt_from_the_wheels_and_removed() {
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        // 30 s at rest: the wheels do not move, the NavX reading grows clockwise by 0.5°/min.
+        for k in 0..=300u64 {
+            let at = ms(k * 100);
+            s.ingest(at, SensorEvent::Heading { cw_deg: 0.5 * (k as f64 * 0.1) / 60.0 });
+            for wheel in 0..4 {
+                s.ingest(at, SensorEvent::Encoder { wheel, count: 0 });
+            }
+            s.estimate_imu_drift(at, &cfg);
+        }
+        let raw = -0.25; // after 30 s the raw yaw is −0.25°
+        assert!((s.imu_drift_deg() - raw).abs() < 0.03, "estimate {:.3}", s.imu_drift_deg());
+        assert!(s.yaw_deg().unwrap().value.abs() < 0.03, "corrected yaw {:.3}", s.yaw_deg().unwrap().value);
+        // off: the raw heading stays
+        let off = CartoConfig { imu_drift_tau_s: 0.0, ..cfg };
+        let mut t = SensorState::default();
+        t.ingest(ms(0), SensorEvent::Heading { cw_deg: 1.0 });
+        t.estimate_imu_drift(ms(0), &off);
+        assert_eq!(t.yaw_deg().unwrap().value, -1.0);
+    }
+
+    #[test]
+    fn wrap180_stays_in_half_open_range() {
+        assert_eq!(wrap180(190.0), -170.0);
+        assert_eq!(wrap180(-190.0), 170.0);
+        assert_eq!(wrap180(180.0), 180.0);
+        assert_eq!(wrap180(-180.0), 180.0);
+        assert_eq!(wrap180(720.0 + 5.0), 5.0);
+    }
+
+    #[test]
+    fn yaw_unwraps_across_north_and_turns_clockwise_into_negative() {
+        let mut s = SensorState::default();
+        s.ingest(ms(0), SensorEvent::Heading { cw_deg: 10.0 });
+        assert_eq!(s.yaw_deg().unwrap().value, -10.0);
+        s.ingest(ms(100), SensorEvent::Heading { cw_deg: 350.0 });
+        assert!((s.yaw_deg().unwrap().value - 10.0).abs() < 1e-9);
+        s.ingest(ms(200), SensorEvent::Heading { cw_deg: 100.0 });
+        assert!((s.yaw_deg().unwrap().value - (-100.0)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn counts_need_all_four_wheels_and_extrapolate_from_the_last_two() {
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        for w in 0..3 {
+            s.ingest(ms(0), SensorEvent::Encoder { wheel: w, count: 0 });
+        }
+        assert!(s.counts().is_none());
+        s.ingest(ms(0), SensorEvent::Encoder { wheel: 3, count: 0 });
+        for w in 0..4 {
+            s.ingest(ms(200), SensorEvent::Encoder { wheel: w, count: 100 });
+        }
+        // 100 counts in 200 ms = 500 counts/s; 100 ms later, 50 more.
+        let p = s.predicted_counts(ms(300), &cfg).unwrap();
+        assert!(p.iter().all(|c| (c - 150.0).abs() < 1e-6), "{p:?}");
+        // extrapolation is capped
+        let p = s.predicted_counts(ms(5000), &cfg).unwrap();
+        assert!(p.iter().all(|c| (c - 250.0).abs() < 1e-6), "{p:?}");
+    }
+
+    #[test]
+    fn fresh_telemetry_wins_over_encoder_differences() {
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        for w in 0..4 {
+            s.ingest(ms(0), SensorEvent::Encoder { wheel: w, count: 0 });
+        }
+        s.ingest(ms(50), SensorEvent::WheelRpm { rpm: [60.0; 4] });
+        let rate = s.wheel_rate_cps(0, ms(100), &cfg);
+        assert!((rate - cfg.encoder_counts_per_wheel_rev).abs() < 1e-6);
+        // stale telemetry is ignored
+        assert_eq!(s.wheel_rate_cps(0, ms(1000), &cfg), 0.0);
+        // pure rotation: FR/RR forward, FL/RL backward → counter-clockwise
+        s.ingest(ms(1000), SensorEvent::WheelRpm { rpm: [-60.0, 60.0, -60.0, 60.0] });
+        assert!(s.yaw_rate_dps(ms(1000), &cfg) > 0.0);
+    }
+
+    #[test]
+    fn line_timer_gives_queued_frames_the_burst_start() {
+        let mut t = LineTimer::new(9600); // 1041.7 µs per byte
+        // A 10-byte frame completes at 110 ms: it started at ~99.58 ms.
+        let a = t.sampled_at(Instant::from_micros(110_000), 10);
+        assert_eq!(a, Instant::from_micros(110_000 - 10_417));
+        // A 42-byte frame queued right behind it completes 43.75 ms later: same burst.
+        let b = t.sampled_at(Instant::from_micros(110_000 + 43_750), 42);
+        assert_eq!(b, a);
+        // After a pause, a new burst starts at its own start.
+        let c = t.sampled_at(Instant::from_micros(300_000), 11);
+        assert_eq!(c, Instant::from_micros(300_000 - 11_458));
+        // No correction without a baud rate.
+        assert_eq!(LineTimer::new(0).sampled_at(Instant::from_millis(5), 40), Instant::from_millis(5));
+    }
+
+    #[test]
+    fn keep_state_sends_at_2hz_with_wrapping_sequence_and_detects_loss() {
+        let mut k = KeepState::new(Duration::from_millis(500), Duration::from_millis(1500));
+        assert_eq!(k.poll(ms(0)), (Some(1), None));
+        assert_eq!(k.poll(ms(499)), (None, None));
+        assert_eq!(k.poll(ms(500)), (Some(2), None));
+        k.heard(ms(600));
+        assert_eq!(k.poll(ms(2099)).1, None);
+        assert_eq!(k.poll(ms(2100)).1, Some(PeerEvent::Lost));
+        assert_eq!(k.poll(ms(2200)).1, None, "loss is reported once");
+        assert_eq!(k.heard(ms(2300)), Some(PeerEvent::Back));
+        k.next_seq = u16::MAX;
+        let (a, _) = k.poll(ms(10_000));
+        let (b, _) = k.poll(ms(10_500));
+        assert_eq!((a, b), (Some(u16::MAX), Some(0)));
+    }
+
+    #[test]
+    fn silent_board_from_the_start_is_lost_after_the_timeout() {
+        let mut k = KeepState::new(Duration::from_millis(500), Duration::from_millis(1500));
+        assert_eq!(k.poll(ms(100)).1, None);
+        assert_eq!(k.poll(ms(1600)).1, Some(PeerEvent::Lost));
+    }
+}

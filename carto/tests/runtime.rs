@@ -1,0 +1,212 @@
+//! CartoRuntime over transport's in-memory links: accept/refuse, closing, board loss, and a full
+//! FORWARD through baud-timed serial links.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod fake;
+
+use carto::{Carto, CartoConfig, CartoRuntime};
+use fake::FakeRobot;
+use protocol::link::{Command, Direction, GuiMessage, MsgOrder};
+use robot_model::time::{Duration, Instant};
+use transport::{Connector, Link, MemLink, MemListener, MockClock, mem_listener};
+
+struct World {
+    clock: MockClock,
+    rt: CartoRuntime<MemListener, MemLink, MemLink>,
+    connector: transport::MemConnector,
+    motor_board: MemLink,
+    sensor_board: MemLink,
+    robot: FakeRobot,
+    now: Instant,
+}
+
+impl World {
+    fn new(baud: bool) -> Self {
+        let clock = MockClock::new();
+        let (listener, connector) = mem_listener(None, clock.clone());
+        let (m_carto, m_board) = MemLink::pair(baud.then_some(115_200), clock.clone());
+        let (s_carto, s_board) = MemLink::pair(baud.then_some(9600), clock.clone());
+        let mut cfg = CartoConfig::default();
+        if !baud {
+            cfg.motor_baud = 0;
+            cfg.sensor_baud = 0;
+        }
+        World {
+            clock,
+            rt: CartoRuntime::new(Carto::new(cfg.clone()), listener, m_carto, s_carto),
+            connector,
+            motor_board: m_board,
+            sensor_board: s_board,
+            robot: FakeRobot::new(cfg),
+            now: Instant::ZERO,
+        }
+    }
+
+    fn tick(&mut self) -> carto::StepReport {
+        self.now += Duration::from_millis(1);
+        self.clock.set_micros(self.now.total_micros());
+        self.robot.step(self.now, 0.001);
+        let (m, s) = self.robot.emit(self.now);
+        // The boards' sides of the links: ignore a closed link (some tests drop Carto's end).
+        let _ = self.motor_board.write(&m);
+        let _ = self.sensor_board.write(&s);
+        let report = self.rt.step(self.now);
+        let mut buf = [0u8; 4096];
+        while let Ok(n @ 1..) = self.motor_board.read(&mut buf) {
+            self.robot.motor_rx(self.now, &buf[..n]);
+        }
+        while let Ok(n @ 1..) = self.sensor_board.read(&mut buf) {
+            self.robot.sensor_rx(self.now, &buf[..n]);
+        }
+        report
+    }
+
+    fn run_ms(&mut self, ms: u64) {
+        for _ in 0..ms {
+            self.tick();
+        }
+    }
+}
+
+fn read_replies(link: &mut MemLink, dec: &mut protocol::link::Decoder) -> Vec<GuiMessage> {
+    let mut buf = [0u8; 1024];
+    let mut out = Vec::new();
+    while let Ok(n @ 1..) = link.read(&mut buf) {
+        out.extend(dec.feed(&buf[..n]).into_iter().map(|r| r.unwrap()));
+    }
+    out
+}
+
+fn pose_bytes() -> Vec<u8> {
+    GuiMessage::SendRobotPosition { x: 1, y: 1, direction: Direction::South }.to_bytes(MsgOrder::BigEndian)
+}
+
+#[test]
+fn second_client_is_refused_while_one_is_connected() {
+    let mut w = World::new(false);
+    let mut first = w.connector.connect().unwrap();
+    let report = w.tick();
+    assert_eq!(report.accepted.as_deref(), Some("mem:1"));
+    let mut second = w.connector.connect().unwrap();
+    let report = w.tick();
+    assert_eq!(report.refused, 1);
+    let mut buf = [0u8; 8];
+    assert!(second.read(&mut buf).unwrap_err().is_disconnected(), "refused client not closed");
+    // The first session is untouched.
+    first.write(&pose_bytes()).unwrap();
+    w.run_ms(2);
+    let mut dec = protocol::link::Decoder::default();
+    assert_eq!(read_replies(&mut first, &mut dec), vec![GuiMessage::RobotPositionReceived]);
+    assert_eq!(w.rt.stats().refused, 1);
+    // After the first leaves, a new one is accepted.
+    drop(first);
+    w.run_ms(2);
+    assert!(!w.rt.has_client());
+    let _third = w.connector.connect().unwrap();
+    assert!(w.tick().accepted.is_some());
+}
+
+#[test]
+fn fatal_framing_error_closes_only_that_connection() {
+    let mut w = World::new(false);
+    let mut c = w.connector.connect().unwrap();
+    w.tick();
+    c.write(&[0x00, 0x01, 0x03]).unwrap(); // Size 1
+    let report = w.tick();
+    assert!(report.client_closed);
+    let mut buf = [0u8; 8];
+    assert!(c.read(&mut buf).unwrap_err().is_disconnected());
+    let mut c2 = w.connector.connect().unwrap();
+    w.tick();
+    c2.write(&pose_bytes()).unwrap();
+    w.run_ms(2);
+    let mut dec = protocol::link::Decoder::default();
+    assert_eq!(read_replies(&mut c2, &mut dec), vec![GuiMessage::RobotPositionReceived]);
+    assert_eq!(w.rt.carto().stats().fatal_errors, 1);
+}
+
+#[test]
+fn forward_through_baud_timed_links() {
+    let mut w = World::new(true);
+    let mut c = w.connector.connect().unwrap();
+    w.run_ms(500);
+    c.write(&pose_bytes()).unwrap();
+    c.write(&GuiMessage::SendMoveCartography { command: Command::Forward }.to_bytes(MsgOrder::BigEndian))
+        .unwrap();
+    let mut dec = protocol::link::Decoder::default();
+    let mut replies = Vec::new();
+    for _ in 0..8000 {
+        w.tick();
+        replies.extend(read_replies(&mut c, &mut dec));
+        if replies.contains(&GuiMessage::MoveDone) {
+            break;
+        }
+    }
+    assert_eq!(
+        replies,
+        vec![
+            GuiMessage::RobotPositionReceived,
+            GuiMessage::SetRobotPosition { x: 2, y: 1 },
+            GuiMessage::MoveDone
+        ]
+    );
+    let d = (w.robot.x.powi(2) + w.robot.y.powi(2)).sqrt();
+    assert!((d - 0.30).abs() <= 0.01, "travelled {d:.4}");
+    assert!(w.robot.carto_keep_states.len() >= 2);
+}
+
+#[test]
+fn client_leaving_mid_move_stops_the_motors() {
+    let mut w = World::new(false);
+    let mut c = w.connector.connect().unwrap();
+    w.run_ms(500);
+    c.write(&pose_bytes()).unwrap();
+    c.write(&GuiMessage::SendMoveCartography { command: Command::Forward }.to_bytes(MsgOrder::BigEndian))
+        .unwrap();
+    w.run_ms(400);
+    assert!(w.robot.moving());
+    drop(c);
+    let t = w.now;
+    w.run_ms(1500);
+    let after = w.robot.drives_since(t);
+    assert!(!after.is_empty() && after.iter().all(|(_, d)| d.is_stop()));
+    assert!(!w.robot.moving());
+}
+
+#[test]
+fn motor_board_link_loss_is_reported_and_moves_are_refused() {
+    let mut w = World::new(false);
+    let mut c = w.connector.connect().unwrap();
+    w.run_ms(500);
+    w.motor_board.close();
+    let mut lost = false;
+    for _ in 0..5 {
+        lost |= w.tick().motor_lost;
+    }
+    assert!(lost);
+    assert!(!w.rt.motor_up());
+    c.write(&pose_bytes()).unwrap();
+    c.write(&GuiMessage::SendMoveCartography { command: Command::Right }.to_bytes(MsgOrder::BigEndian))
+        .unwrap();
+    w.run_ms(5);
+    let mut dec = protocol::link::Decoder::default();
+    assert_eq!(read_replies(&mut c, &mut dec), vec![GuiMessage::RobotPositionReceived, GuiMessage::MoveDone]);
+    assert_eq!(w.rt.carto().stats().moves_failed, 1);
+}
+
+#[test]
+fn stop_motors_sends_a_zero_drive() {
+    let mut w = World::new(false);
+    w.run_ms(50);
+    let t = w.now;
+    assert!(w.rt.stop_motors(w.now));
+    let mut buf = [0u8; 64];
+    let n = w.motor_board.read(&mut buf).unwrap();
+    assert_eq!(
+        &buf[..n],
+        &[0xAA, 0x06, 0x10, 0, 0, 0, 0, 0, 0, 0x16],
+        "stop frame (protocols-research §2.8)"
+    );
+    let _ = t;
+}

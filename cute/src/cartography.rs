@@ -1,0 +1,488 @@
+//! Cartography: the design document's serpentine coverage with A* detours, sans-IO.
+//!
+//! Concept: the robot does not know the room. Every map cell is unknown (2) until the robot
+//! stands in it (free, 1) or bumps into it (obstacle, 0). The route is a serpentine from the
+//! top-left corner: row 0 left to right, row 1 right to left, and so on. The [`Cartographer`]
+//! always aims at the *first cell of the route that is still unknown* and drives there one
+//! command at a time ([`Cartographer::next_command`]); the caller executes the command and
+//! reports what happened ([`Cartographer::on_result`]): a FORWARD either moved the robot (the
+//! cell becomes free) or met an obstacle (the cell ahead becomes 0).
+//!
+//! Detours ("follow the obstacle's contour by the shortest way, preferring cells already mapped,
+//! aiming at the next cell of the route"): when the target is not adjacent, or the planned next
+//! cell turns out blocked, A* ([`crate::astar`], fast order) plans from the robot to the target
+//! over known free cells (cost 1) **and unknown cells at a higher cost** ([`DEFAULT_UNKNOWN_COST`]).
+//! Unknown cells on the way are probed by driving into them, which maps them too; a bump
+//! triggers a new plan. We chose one weighted search over "known cells first, then fall back"
+//! because it gives the same path whenever a known detour is nearly as short, and explores
+//! otherwise, with one search instead of two.
+//!
+//! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
+//! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
+//! the robot then marks *every* unknown cell it cannot reach as unreachable at once (a closed
+//! pocket costs one flood, not one search per cell); they stay unknown (2) on the map.
+//!
+//! Invariants: [`Cartographer::next_command`] returns `None` (done) only when every map cell is
+//! known or proven unreachable, so every cell reachable from the start has been visited. It
+//! never asks for a FORWARD into a cell the map shows as an obstacle or off the map. Each search
+//! or bump gains information, so the sweep always ends. The room's outer walls need not be
+//! known: cells outside the room are met as obstacles like any other.
+//!
+//! ```
+//! use cute::cartography::{Cartographer, MoveResult};
+//! use cute::map::Map;
+//! use cute::motion::{Command, Heading};
+//! // A 1 x 3 corridor whose last cell is blocked.
+//! let mut map = Map::new(1, 3).unwrap();
+//! map.set_robot(0, 0).unwrap();
+//! let mut carto = Cartographer::new(1, 3, (0, 0), Heading::East).unwrap();
+//! assert_eq!(carto.next_command(&map), Some(Command::Forward));
+//! carto.on_result(&mut map, MoveResult::Moved { x: 0, y: 1 });
+//! assert_eq!(carto.next_command(&map), Some(Command::Forward));
+//! carto.on_result(&mut map, MoveResult::Blocked { x: 0, y: 2 });
+//! assert_eq!(carto.next_command(&map), None); // done
+//! assert_eq!(map.to_text(), "150\n");
+//! ```
+
+use thiserror::Error;
+use tracing::{debug, warn};
+
+use crate::astar::{AStar, Grid, TieBreak};
+use crate::map::{CellValue, MAX_SIDE, Map};
+use crate::motion::{Command, Heading, turns_between};
+use crate::trajectory::fill_grid;
+
+/// Cost of entering an unknown cell in a detour, against 1 for a known free cell.
+pub const DEFAULT_UNKNOWN_COST: u8 = 2;
+
+/// What happened to the last command, as Carto reported it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MoveResult {
+    /// FORWARD succeeded: the robot is now in cell `(x, y)` (SET_ROBOT_POSITION).
+    Moved {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+    },
+    /// FORWARD met an obstacle in cell `(x, y)`; the robot did not move (SET_OBSTACLE_POSITION).
+    Blocked {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+    },
+    /// RIGHT or LEFT was executed (MOVE_DONE alone after a turn).
+    Turned,
+    /// Carto answered MOVE_DONE without doing anything (e.g. it had no pose yet).
+    NotExecuted,
+}
+
+/// Why a cartographer could not be created.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[non_exhaustive]
+pub enum CartoError {
+    /// A side is zero or above 256.
+    #[error("area size {rows}x{cols} is outside 1..=256 per side")]
+    BadSize {
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        cols: usize,
+    },
+    /// The start cell lies outside the area.
+    #[error("start ({x}, {y}) is outside the {rows}x{cols} area")]
+    StartOutside {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+        /// Rows.
+        rows: usize,
+        /// Columns.
+        cols: usize,
+    },
+}
+
+/// Counters kept by a [`Cartographer`], for reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CartoStats {
+    /// Commands issued (FORWARD + turns); a command re-issued after `NotExecuted` counts again.
+    pub commands: u64,
+    /// FORWARDs issued.
+    pub forwards: u64,
+    /// RIGHTs and LEFTs issued.
+    pub turns: u64,
+    /// FORWARDs answered with an obstacle.
+    pub bumps: u64,
+    /// A* searches run for detours.
+    pub searches: u64,
+    /// Cells concluded unreachable.
+    pub unreachable: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Known {
+    Free,
+    Unknown,
+    Blocked,
+}
+
+/// The coverage state machine: call [`Cartographer::next_command`], execute, then
+/// [`Cartographer::on_result`], until `next_command` returns `None`.
+#[derive(Debug, Clone)]
+pub struct Cartographer {
+    rows: usize,
+    cols: usize,
+    pose: (u8, u8),
+    heading: Heading,
+    /// Index in the serpentine route; every cell before it is known or unreachable.
+    cursor: usize,
+    unreachable: Vec<bool>,
+    target: Option<(u8, u8)>,
+    /// Remaining cells of the current plan, next cell last.
+    plan: Vec<(u8, u8)>,
+    pending: Option<Command>,
+    astar: AStar,
+    grid: Grid,
+    unknown_cost: u8,
+    done: bool,
+    stats: CartoStats,
+    flood_seen: Vec<bool>,
+    flood_stack: Vec<(u8, u8)>,
+}
+
+impl Cartographer {
+    /// A cartographer for a `rows × cols` area, robot at `start` facing `heading`.
+    pub fn new(
+        rows: usize,
+        cols: usize,
+        start: (u8, u8),
+        heading: Heading,
+    ) -> Result<Cartographer, CartoError> {
+        if rows == 0 || cols == 0 || rows > MAX_SIDE || cols > MAX_SIDE {
+            return Err(CartoError::BadSize { rows, cols });
+        }
+        if usize::from(start.0) >= rows || usize::from(start.1) >= cols {
+            return Err(CartoError::StartOutside { x: start.0, y: start.1, rows, cols });
+        }
+        let grid = Grid::blocked(rows, cols).map_err(|_| CartoError::BadSize { rows, cols })?;
+        Ok(Cartographer {
+            rows,
+            cols,
+            pose: start,
+            heading,
+            cursor: 0,
+            unreachable: vec![false; rows * cols],
+            target: None,
+            plan: Vec::new(),
+            pending: None,
+            astar: AStar::new(),
+            grid,
+            unknown_cost: DEFAULT_UNKNOWN_COST,
+            done: false,
+            stats: CartoStats::default(),
+            flood_seen: vec![false; rows * cols],
+            flood_stack: Vec::new(),
+        })
+    }
+
+    /// Sets the cost of entering an unknown cell during detours (clamped to 1..=255).
+    pub fn with_unknown_cost(mut self, cost: u8) -> Cartographer {
+        self.unknown_cost = cost.max(1);
+        self
+    }
+
+    /// The robot's cell as the cartographer believes it.
+    pub fn pose(&self) -> (u8, u8) {
+        self.pose
+    }
+
+    /// The robot's heading as the cartographer believes it.
+    pub fn heading(&self) -> Heading {
+        self.heading
+    }
+
+    /// The cell the sweep is heading for, if any.
+    pub fn target(&self) -> Option<(u8, u8)> {
+        self.target
+    }
+
+    /// The command sent and not yet answered, if any.
+    pub fn pending(&self) -> Option<Command> {
+        self.pending
+    }
+
+    /// True once every cell is known or proven unreachable.
+    pub fn is_done(&self) -> bool {
+        self.done
+    }
+
+    /// The counters so far.
+    pub fn stats(&self) -> CartoStats {
+        self.stats
+    }
+
+    /// True if `(x, y)` was concluded unreachable from the robot.
+    pub fn is_unreachable(&self, x: u8, y: u8) -> bool {
+        self.index((x, y)).is_some_and(|i| self.unreachable[i])
+    }
+
+    /// Every cell concluded unreachable, in row-major order.
+    pub fn unreachable_cells(&self) -> Vec<(u8, u8)> {
+        (0..self.rows * self.cols)
+            .filter(|&i| self.unreachable[i])
+            .map(|i| ((i / self.cols) as u8, (i % self.cols) as u8))
+            .collect()
+    }
+
+    /// Forgets the unanswered command (after a STOP), so the next call plans afresh.
+    pub fn cancel_pending(&mut self) {
+        self.pending = None;
+        self.plan.clear();
+    }
+
+    /// The `i`-th cell of the serpentine route.
+    pub fn route_cell(&self, i: usize) -> Option<(u8, u8)> {
+        if i >= self.rows * self.cols {
+            return None;
+        }
+        let row = i / self.cols;
+        let k = i % self.cols;
+        let col = if row.is_multiple_of(2) { k } else { self.cols - 1 - k };
+        Some((row as u8, col as u8))
+    }
+
+    fn index(&self, c: (u8, u8)) -> Option<usize> {
+        let (x, y) = (usize::from(c.0), usize::from(c.1));
+        (x < self.rows && y < self.cols).then_some(x * self.cols + y)
+    }
+
+    fn classify(&self, map: &Map, c: (u8, u8)) -> Known {
+        if c == self.pose {
+            return Known::Free;
+        }
+        match map.at(c) {
+            None | Some(CellValue::Obstacle) => Known::Blocked,
+            Some(CellValue::Unknown) => Known::Unknown,
+            Some(_) => Known::Free,
+        }
+    }
+
+    fn is_open_target(&self, map: &Map, c: (u8, u8)) -> bool {
+        self.classify(map, c) == Known::Unknown && self.index(c).is_some_and(|i| !self.unreachable[i])
+    }
+
+    /// The next command to execute, or `None` when the sweep is complete. Until
+    /// [`Cartographer::on_result`] is called, it keeps returning the same command (re-send it
+    /// after a reconnect).
+    pub fn next_command(&mut self, map: &Map) -> Option<Command> {
+        if let Some(c) = self.pending {
+            return Some(c);
+        }
+        // Each pass either returns, or moves the cursor / marks cells unreachable: bounded.
+        for _ in 0..(2 * self.rows * self.cols + 4) {
+            let target = match self.target {
+                Some(t) if self.is_open_target(map, t) => t,
+                _ => {
+                    self.plan.clear();
+                    self.target = None;
+                    while let Some(c) = self.route_cell(self.cursor) {
+                        if self.is_open_target(map, c) {
+                            self.target = Some(c);
+                            break;
+                        }
+                        self.cursor += 1;
+                    }
+                    match self.target {
+                        Some(t) => t,
+                        None => {
+                            self.done = true;
+                            return None;
+                        }
+                    }
+                }
+            };
+            let stale = match self.plan.last() {
+                None => true,
+                Some(&n) => {
+                    Heading::between(self.pose, n).is_none() || self.classify(map, n) == Known::Blocked
+                }
+            };
+            if stale {
+                self.plan.clear();
+                if Heading::between(self.pose, target).is_some() {
+                    self.plan.push(target);
+                } else if !self.plan_detour(map, target) {
+                    self.mark_unreachable(map, target);
+                    continue;
+                }
+            }
+            let Some(&next) = self.plan.last() else {
+                continue;
+            };
+            let Some(want) = Heading::between(self.pose, next) else {
+                continue;
+            };
+            let cmd = match turns_between(self.heading, want).first() {
+                None => Command::Forward,
+                Some(turn) => *turn,
+            };
+            self.pending = Some(cmd);
+            self.stats.commands += 1;
+            if cmd == Command::Forward {
+                self.stats.forwards += 1;
+            } else {
+                self.stats.turns += 1;
+            }
+            return Some(cmd);
+        }
+        warn!("cartography made no progress; stopping the sweep");
+        self.done = true;
+        None
+    }
+
+    /// A* from the robot to `target` over free (1) and unknown (`unknown_cost`) cells.
+    fn plan_detour(&mut self, map: &Map, target: (u8, u8)) -> bool {
+        fill_grid(&mut self.grid, map, self.unknown_cost);
+        self.stats.searches += 1;
+        let from = (usize::from(self.pose.0), usize::from(self.pose.1));
+        let to = (usize::from(target.0), usize::from(target.1));
+        match self.astar.search_with(&self.grid, from, to, TieBreak::Fast) {
+            Some(path) => {
+                debug!(?target, cost = path.cost, "detour planned");
+                self.plan.extend(path.cells.iter().skip(1).rev().map(|&(x, y)| (x as u8, y as u8)));
+                !self.plan.is_empty()
+            }
+            None => false,
+        }
+    }
+
+    /// Marks every unknown cell the robot cannot reach through non-blocked cells.
+    fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
+        self.flood_seen.fill(false);
+        self.flood_stack.clear();
+        if let Some(i) = self.index(self.pose) {
+            self.flood_seen[i] = true;
+            self.flood_stack.push(self.pose);
+        }
+        while let Some(c) = self.flood_stack.pop() {
+            for h in Heading::ALL {
+                let Some(n) = h.step(c, self.rows, self.cols) else {
+                    continue;
+                };
+                let Some(i) = self.index(n) else { continue };
+                if !self.flood_seen[i] && self.classify(map, n) != Known::Blocked {
+                    self.flood_seen[i] = true;
+                    self.flood_stack.push(n);
+                }
+            }
+        }
+        let mut newly = 0;
+        for i in 0..self.rows * self.cols {
+            let c = ((i / self.cols) as u8, (i % self.cols) as u8);
+            if !self.flood_seen[i] && !self.unreachable[i] && self.classify(map, c) == Known::Unknown {
+                self.unreachable[i] = true;
+                newly += 1;
+            }
+        }
+        // The search failed, so the target must be among them; make sure progress is made.
+        if let Some(i) = self.index(target)
+            && !self.unreachable[i]
+        {
+            self.unreachable[i] = true;
+            newly += 1;
+        }
+        self.stats.unreachable += newly;
+        debug!(?target, newly, "cells concluded unreachable");
+        self.target = None;
+        self.plan.clear();
+    }
+
+    /// Feeds back what the last command did, updating the map and the robot's pose.
+    pub fn on_result(&mut self, map: &mut Map, result: MoveResult) {
+        let cmd = self.pending.take();
+        match result {
+            MoveResult::Turned => match cmd {
+                Some(c) if c.is_turn() => self.heading = self.heading.after(c),
+                other => warn!(?other, "turn reported for a command that was not a turn"),
+            },
+            MoveResult::Moved { x, y } => {
+                if !map.contains(usize::from(x), usize::from(y)) || self.index((x, y)).is_none() {
+                    warn!(x, y, "robot reported outside the map; ignored");
+                    self.plan.clear();
+                    return;
+                }
+                let (px, py) = (usize::from(self.pose.0), usize::from(self.pose.1));
+                if map.at(self.pose).is_some_and(|v| !v.is_known_free()) {
+                    let _ = map.set_free(px, py);
+                }
+                let _ = map.set_robot(usize::from(x), usize::from(y));
+                if self.plan.last() == Some(&(x, y)) {
+                    self.plan.pop();
+                } else {
+                    self.plan.clear();
+                }
+                self.pose = (x, y);
+            }
+            MoveResult::Blocked { x, y } => {
+                self.stats.bumps += 1;
+                if (x, y) != self.pose {
+                    // Outside the map it cannot be written, and needs not be: it is never planned.
+                    let _ = map.set_obstacle(usize::from(x), usize::from(y));
+                }
+                self.plan.clear();
+            }
+            MoveResult::NotExecuted => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn route_is_a_serpentine_from_top_left() {
+        let c = Cartographer::new(3, 3, (0, 0), Heading::East).unwrap();
+        let route: Vec<_> = (0..9).map(|i| c.route_cell(i).unwrap()).collect();
+        assert_eq!(route, vec![(0, 0), (0, 1), (0, 2), (1, 2), (1, 1), (1, 0), (2, 0), (2, 1), (2, 2)]);
+        assert_eq!(c.route_cell(9), None);
+    }
+
+    #[test]
+    fn bad_sizes_and_starts_are_refused() {
+        assert_eq!(
+            Cartographer::new(0, 3, (0, 0), Heading::East).err(),
+            Some(CartoError::BadSize { rows: 0, cols: 3 })
+        );
+        assert!(matches!(
+            Cartographer::new(3, 3, (3, 0), Heading::East),
+            Err(CartoError::StartOutside { x: 3, .. })
+        ));
+    }
+
+    #[test]
+    fn pending_command_repeats_until_answered() {
+        let map = Map::new(2, 2).unwrap();
+        let mut c = Cartographer::new(2, 2, (0, 0), Heading::South).unwrap();
+        let first = c.next_command(&map).unwrap();
+        assert_eq!(first, Command::Left); // face EAST towards (0, 1)
+        assert_eq!(c.next_command(&map), Some(first));
+        assert_eq!(c.stats().commands, 1);
+    }
+
+    #[test]
+    fn enclosed_start_finishes_without_moving() {
+        let mut map = Map::new(3, 3).unwrap();
+        map.set_robot(1, 1).unwrap();
+        for (x, y) in [(0, 1), (1, 0), (1, 2), (2, 1)] {
+            map.set_obstacle(x, y).unwrap();
+        }
+        let mut c = Cartographer::new(3, 3, (1, 1), Heading::East).unwrap();
+        assert_eq!(c.next_command(&map), None);
+        assert!(c.is_done());
+        assert_eq!(c.unreachable_cells(), vec![(0, 0), (0, 2), (2, 0), (2, 2)]);
+        assert_eq!(c.stats().searches, 1);
+    }
+}

@@ -1,0 +1,772 @@
+//! Cute's operator GUI on Bevy + egui (feature `window`): the map, the robot, the buttons, the
+//! pop-ups, and click-to-go.
+//!
+//! Concept: [`CutePlugin<R>`] draws and drives whatever [`Cute`] session the resource `R` holds
+//! ([`CuteAccess`]), so the standalone `cute` binary (a TCP session) and the twin's window (the
+//! lockstep runner's session) share one plugin. It owns a rectangle of the window, the
+//! [`CuteView`]: an egui toolbar at its top (Cartography / Stop / Reset map and a status line),
+//! and below it the map, one texel per cell, coloured as the original Cute did ([`cell_rgb`]:
+//! 0 obstacle black, 1 free grey, 2 unknown white, 3 waypoint red, 4 destination orange,
+//! 5 robot blue), with grid lines and the robot's heading drawn as gizmos. A left click on the
+//! map calls [`Cute::go_to`] on that cell; session events become pop-ups ([`popup_for`]: no path,
+//! connection lost, obstacle met, ...) and a log line.
+//!
+//! Coordinates: the plugin draws for one `Camera2d` at the origin with the default projection,
+//! so one world unit is one logical pixel ([`setup_camera`] spawns it). [`MapLayout`] converts
+//! between map cells and logical window pixels (origin top-left, y down); it is plain geometry,
+//! used by the drawing, the clicks, and the screenshot tests alike.
+//!
+//! Invariants: the plugin never reads a clock or a socket; it only calls the session's user
+//! actions and [`Cute::take_events`]. The map texture is rewritten only when a cell changed.
+//!
+//! ```
+//! use bevy::math::{Rect, Vec2};
+//! use cute::gui::{CuteView, MapLayout, cell_rgb};
+//! use cute::CellValue;
+//! // The right half of a 1280 x 720 window, 30 px kept free at the bottom.
+//! let view = CuteView { region: Rect::new(0.5, 0.0, 1.0, 1.0), inset_bottom: 30.0 };
+//! let layout = MapLayout::compute(Vec2::new(1280.0, 720.0), &view, 8, 10);
+//! let centre = layout.cell_rect(3, 4).center();
+//! assert_eq!(layout.cell_at(centre), Some((3, 4)));
+//! assert!(layout.map_rect().min.x >= 640.0);
+//! assert_eq!(cell_rgb(CellValue::Obstacle), [20, 20, 20]);
+//! ```
+
+use std::collections::VecDeque;
+use std::marker::PhantomData;
+use std::path::{Path, PathBuf};
+
+use bevy::DefaultPlugins;
+use bevy::app::{App, AppExit, Plugin, PluginGroup, PluginGroupBuilder, Startup, Update};
+use bevy::asset::{Assets, Handle, RenderAssetUsages};
+use bevy::camera::visibility::Visibility;
+use bevy::color::Color;
+use bevy::core_pipeline::core_2d::Camera2d;
+use bevy::ecs::message::MessageWriter;
+use bevy::ecs::observer::On;
+use bevy::ecs::schedule::IntoScheduleConfigs;
+use bevy::ecs::schedule::common_conditions::{not, resource_exists};
+use bevy::ecs::system::{Commands, Query, Res, ResMut, Single};
+use bevy::gizmos::gizmos::Gizmos;
+use bevy::image::{Image, ImageSampler};
+use bevy::input::ButtonInput;
+use bevy::input::mouse::MouseButton;
+use bevy::math::{Rect, Vec2, Vec3};
+use bevy::prelude::{Component, Resource, Transform, With};
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
+use bevy::sprite::Sprite;
+use bevy::window::{PrimaryWindow, Window, WindowPlugin, WindowResolution};
+use bevy::winit::{UpdateMode, WinitPlugin, WinitSettings};
+use bevy_egui::input::egui_wants_any_pointer_input;
+use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
+
+use crate::map::CellValue;
+use crate::motion::Heading;
+use crate::session::{Compat, Cute, CuteEvent, Status};
+use crate::trajectory::PlanError;
+
+/// Height of the toolbar at the top of the [`CuteView`], logical pixels.
+pub const TOOLBAR_HEIGHT: f32 = 64.0;
+/// Space around the map inside its region, logical pixels.
+pub const MAP_PADDING: f32 = 10.0;
+/// Lines kept in the event log.
+const LOG_LINES: usize = 6;
+/// Window background.
+pub const BACKGROUND: Color = Color::srgb(0.16, 0.17, 0.20);
+
+/// A resource that gives access to a [`Cute`] session.
+pub trait CuteAccess: Resource {
+    /// The session, to draw.
+    fn cute(&self) -> &Cute;
+    /// The session, for user actions and events.
+    fn cute_mut(&mut self) -> &mut Cute;
+}
+
+impl CuteAccess for CuteSession {
+    fn cute(&self) -> &Cute {
+        &self.0
+    }
+    fn cute_mut(&mut self) -> &mut Cute {
+        &mut self.0
+    }
+}
+
+/// A bare session as a resource (tests, demos): nothing pumps its network.
+#[derive(Resource, Debug)]
+pub struct CuteSession(pub Cute);
+
+/// The part of the window the plugin draws in.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct CuteView {
+    /// The region as fractions of the window (0..1 each way, origin top-left, y down).
+    pub region: Rect,
+    /// Logical pixels kept free at the bottom of the region (another plugin's status bar).
+    pub inset_bottom: f32,
+}
+
+impl Default for CuteView {
+    fn default() -> Self {
+        CuteView { region: Rect::new(0.0, 0.0, 1.0, 1.0), inset_bottom: 0.0 }
+    }
+}
+
+impl CuteView {
+    /// The region in logical pixels for a window of `window` logical pixels.
+    pub fn region_px(&self, window: Vec2) -> Rect {
+        Rect::from_corners(self.region.min * window, self.region.max * window)
+    }
+}
+
+/// Where the map lies in the window: logical pixels, origin top-left, y down.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MapLayout {
+    /// Top-left corner of cell (0, 0).
+    pub origin: Vec2,
+    /// Side of one cell.
+    pub cell: f32,
+    /// Map rows.
+    pub rows: usize,
+    /// Map columns.
+    pub cols: usize,
+}
+
+impl MapLayout {
+    /// Fits a `rows × cols` map, square cells, centred in the view's region below the toolbar.
+    /// Cells of 4 px or more get a whole number of pixels, so grid lines stay crisp.
+    pub fn compute(window: Vec2, view: &CuteView, rows: usize, cols: usize) -> MapLayout {
+        let region = view.region_px(window);
+        let top = region.min.y + TOOLBAR_HEIGHT + MAP_PADDING;
+        let bottom = region.max.y - view.inset_bottom - MAP_PADDING;
+        let left = region.min.x + MAP_PADDING;
+        let right = region.max.x - MAP_PADDING;
+        let (w, h) = ((right - left).max(1.0), (bottom - top).max(1.0));
+        let (rows, cols) = (rows.max(1), cols.max(1));
+        let mut cell = (w / cols as f32).min(h / rows as f32);
+        if cell >= 4.0 {
+            cell = cell.floor();
+        }
+        let size = Vec2::new(cell * cols as f32, cell * rows as f32);
+        let origin = Vec2::new(left + (w - size.x) * 0.5, top + (h - size.y) * 0.5).round();
+        MapLayout { origin, cell, rows, cols }
+    }
+
+    /// The whole map.
+    pub fn map_rect(&self) -> Rect {
+        Rect::from_corners(
+            self.origin,
+            self.origin + Vec2::new(self.cols as f32, self.rows as f32) * self.cell,
+        )
+    }
+
+    /// The square of cell (row, col).
+    pub fn cell_rect(&self, row: usize, col: usize) -> Rect {
+        let min = self.origin + Vec2::new(col as f32, row as f32) * self.cell;
+        Rect::from_corners(min, min + Vec2::splat(self.cell))
+    }
+
+    /// The cell under logical point `p`, if any.
+    pub fn cell_at(&self, p: Vec2) -> Option<(u8, u8)> {
+        let rel = (p - self.origin) / self.cell;
+        if rel.x < 0.0 || rel.y < 0.0 {
+            return None;
+        }
+        let (row, col) = (rel.y.floor() as usize, rel.x.floor() as usize);
+        if row >= self.rows || col >= self.cols {
+            return None;
+        }
+        Some((u8::try_from(row).ok()?, u8::try_from(col).ok()?))
+    }
+}
+
+/// Logical window point (origin top-left, y down) to world point for a `Camera2d` at the
+/// origin with the default projection.
+pub fn logical_to_world(window: Vec2, p: Vec2) -> Vec2 {
+    Vec2::new(p.x - window.x * 0.5, window.y * 0.5 - p.y)
+}
+
+/// The sRGB colour of a cell value, as the original Cute drew it.
+pub const fn cell_rgb(value: CellValue) -> [u8; 3] {
+    match value {
+        CellValue::Obstacle => [20, 20, 20],
+        CellValue::Free => [190, 190, 190],
+        CellValue::Unknown => [250, 250, 250],
+        CellValue::Waypoint => [220, 40, 40],
+        CellValue::Destination => [245, 150, 20],
+        CellValue::Robot => [40, 90, 230],
+    }
+}
+
+/// A message box the operator must acknowledge.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Popup {
+    /// Window title.
+    pub title: String,
+    /// Message.
+    pub text: String,
+}
+
+/// The pop-up an event deserves, if any: no path, connection lost, obstacle met, and the
+/// failures that end a mission.
+pub fn popup_for(event: &CuteEvent) -> Option<Popup> {
+    let (title, text) = match event {
+        CuteEvent::NoPath { x, y } => ("No path", format!("No path over known free cells to ({x}, {y}).")),
+        CuteEvent::ConnectionLost => {
+            ("Connection lost", "The connection to Carto was lost; reconnecting.".to_string())
+        }
+        CuteEvent::ObstacleMet { x, y } => {
+            ("Obstacle", format!("The robot met an obstacle at ({x}, {y}); the trajectory was aborted."))
+        }
+        CuteEvent::MoveTimeout { waiting_for } => {
+            ("Timeout", format!("Carto did not answer in time (waiting for {waiting_for:?})."))
+        }
+        CuteEvent::MoveRejected { command } => {
+            ("Move refused", format!("Carto keeps refusing {command}; cartography stopped."))
+        }
+        CuteEvent::ProtocolError { message, fatal: true } => {
+            ("Protocol error", format!("{message}; the connection was closed."))
+        }
+        _ => return None,
+    };
+    Some(Popup { title: title.to_string(), text })
+}
+
+/// One log line for an event.
+pub fn describe(event: &CuteEvent) -> String {
+    match event {
+        CuteEvent::Connected => "connected to Carto".to_string(),
+        CuteEvent::ConnectionLost => "connection lost".to_string(),
+        CuteEvent::PositionAcknowledged => "position acknowledged".to_string(),
+        CuteEvent::ObstacleMet { x, y } => format!("obstacle met at ({x}, {y})"),
+        CuteEvent::NoPath { x, y } => format!("no path to ({x}, {y})"),
+        CuteEvent::Reached { x, y } => format!("reached ({x}, {y})"),
+        CuteEvent::TrajectorySent { commands } => format!("trajectory of {commands} commands sent"),
+        CuteEvent::MappingDone { free, obstacles, unreachable, moves } => format!(
+            "mapping done: {free} free, {obstacles} obstacles, {unreachable} unreachable, {moves} moves"
+        ),
+        CuteEvent::MoveTimeout { waiting_for } => format!("timeout waiting for {waiting_for:?}"),
+        CuteEvent::MoveRejected { command } => format!("{command} refused"),
+        CuteEvent::Stopped => "stopped".to_string(),
+        CuteEvent::ProtocolError { message, fatal } => {
+            format!("protocol error{}: {message}", if *fatal { " (fatal)" } else { "" })
+        }
+    }
+}
+
+/// What the GUI shows besides the session: pop-ups waiting, the log, the last notice.
+#[derive(Resource, Debug, Default, Clone)]
+pub struct CuteUiState {
+    /// Pop-ups, oldest first; the first is shown.
+    pub popups: VecDeque<Popup>,
+    /// Recent events, oldest first.
+    pub log: VecDeque<String>,
+    /// The answer to the last user action (e.g. why a click did nothing).
+    pub notice: Option<String>,
+}
+
+impl CuteUiState {
+    /// Records an event: a log line, and a pop-up unless the same one is already waiting.
+    pub fn record(&mut self, event: &CuteEvent) {
+        self.log.push_back(describe(event));
+        while self.log.len() > LOG_LINES {
+            self.log.pop_front();
+        }
+        if let Some(p) = popup_for(event)
+            && !self.popups.contains(&p)
+        {
+            self.popups.push_back(p);
+        }
+    }
+}
+
+/// A screenshot of the primary window, taken once `ready` is set and `settle_frames` more frames
+/// have been drawn; the app exits when the file is written.
+#[derive(Resource, Debug, Clone)]
+pub struct AutoScreenshot {
+    /// Where the PNG goes.
+    pub path: PathBuf,
+    /// Set by the owner when the scene is ready.
+    pub ready: bool,
+    /// Frames to draw after `ready` before capturing (egui and textures need a few).
+    pub settle_frames: u32,
+    settled: u32,
+    requested: bool,
+}
+
+impl AutoScreenshot {
+    /// A screenshot to `path`, not ready yet, 5 settle frames.
+    pub fn new(path: impl Into<PathBuf>) -> AutoScreenshot {
+        AutoScreenshot { path: path.into(), ready: false, settle_frames: 5, settled: 0, requested: false }
+    }
+}
+
+fn auto_screenshot(mut commands: Commands, mut shot: ResMut<AutoScreenshot>) {
+    if !shot.ready || shot.requested {
+        return;
+    }
+    shot.settled += 1;
+    if shot.settled > shot.settle_frames {
+        shot.requested = true;
+        capture_and_exit(&mut commands, shot.path.clone());
+    }
+}
+
+/// Captures the primary window to a PNG at `path`, then exits (with an error code if the file
+/// cannot be written).
+pub fn capture_and_exit(commands: &mut Commands, path: PathBuf) {
+    commands.spawn(Screenshot::primary_window()).observe(
+        move |captured: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| match save_png(
+            &captured.image,
+            &path,
+        ) {
+            Ok(()) => {
+                println!("screenshot saved to {}", path.display());
+                exit.write(AppExit::Success);
+            }
+            Err(e) => {
+                eprintln!("cannot save the screenshot to {}: {e}", path.display());
+                exit.write(AppExit::error());
+            }
+        },
+    );
+}
+
+fn save_png(image: &Image, path: &Path) -> Result<(), String> {
+    let rgb = image.clone().try_into_dynamic().map_err(|e| e.to_string())?.to_rgb8();
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+    }
+    rgb.save(path).map_err(|e| e.to_string())
+}
+
+/// Bevy's default plugins as the `window` feature provides them, with one primary window of
+/// `width × height` logical pixels titled `title`. Bevy's log plugin is left out (the binaries
+/// install their own `tracing` subscriber). `any_thread` lets tests open the window off the
+/// main thread.
+pub fn window_plugins(title: &str, width: u32, height: u32, any_thread: bool) -> PluginGroupBuilder {
+    DefaultPlugins
+        .set(WindowPlugin {
+            primary_window: Some(Window {
+                title: title.to_string(),
+                resolution: WindowResolution::new(width, height),
+                ..Window::default()
+            }),
+            ..WindowPlugin::default()
+        })
+        .set(WinitPlugin { run_on_any_thread: any_thread })
+        .disable::<bevy::log::LogPlugin>()
+}
+
+/// Keeps the app updating every frame whether or not the window has the focus (the session
+/// and the twin must keep running).
+pub fn continuous_updates() -> WinitSettings {
+    WinitSettings { focused_mode: UpdateMode::Continuous, unfocused_mode: UpdateMode::Continuous }
+}
+
+/// Spawns the one `Camera2d` both plugins draw for.
+pub fn setup_camera(mut commands: Commands) {
+    commands.spawn(Camera2d);
+}
+
+/// The Cute GUI for the session in resource `R`; see the module docs.
+pub struct CutePlugin<R> {
+    view: CuteView,
+    _session: PhantomData<fn() -> R>,
+}
+
+impl<R: CuteAccess> CutePlugin<R> {
+    /// The plugin drawing in the whole window.
+    pub fn new() -> Self {
+        Self::with_view(CuteView::default())
+    }
+
+    /// The plugin drawing in `view`.
+    pub fn with_view(view: CuteView) -> Self {
+        CutePlugin { view, _session: PhantomData }
+    }
+}
+
+impl<R: CuteAccess> Default for CutePlugin<R> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<R: CuteAccess> Plugin for CutePlugin<R> {
+    fn build(&self, app: &mut App) {
+        if !app.is_plugin_added::<EguiPlugin>() {
+            app.add_plugins(EguiPlugin::default());
+        }
+        app.insert_resource(self.view)
+            .init_resource::<CuteUiState>()
+            .add_systems(Startup, spawn_map_sprite)
+            .add_systems(
+                Update,
+                (
+                    collect_events::<R>,
+                    click_to_go::<R>.run_if(not(egui_wants_any_pointer_input)),
+                    update_map_sprite::<R>,
+                    draw_map_overlay::<R>,
+                    auto_screenshot.run_if(resource_exists::<AutoScreenshot>),
+                )
+                    .chain(),
+            )
+            .add_systems(EguiPrimaryContextPass, cute_toolbar::<R>);
+    }
+}
+
+/// The sprite showing the map texture.
+#[derive(Component)]
+struct MapSprite;
+
+/// The map texture and the cells it shows.
+#[derive(Resource)]
+struct MapTexture {
+    handle: Handle<Image>,
+    shown: Vec<CellValue>,
+    size: (usize, usize),
+}
+
+fn map_image(rows: usize, cols: usize) -> Image {
+    let mut image = Image::new_fill(
+        Extent3d { width: cols.max(1) as u32, height: rows.max(1) as u32, depth_or_array_layers: 1 },
+        TextureDimension::D2,
+        &[255, 255, 255, 255],
+        TextureFormat::Rgba8UnormSrgb,
+        RenderAssetUsages::MAIN_WORLD | RenderAssetUsages::RENDER_WORLD,
+    );
+    image.sampler = ImageSampler::nearest();
+    image
+}
+
+fn spawn_map_sprite(mut commands: Commands, mut images: ResMut<Assets<Image>>) {
+    let handle = images.add(map_image(1, 1));
+    commands.spawn((
+        MapSprite,
+        Sprite { image: handle.clone(), custom_size: Some(Vec2::ONE), ..Sprite::default() },
+        Transform::default(),
+        Visibility::Hidden,
+    ));
+    commands.insert_resource(MapTexture { handle, shown: Vec::new(), size: (0, 0) });
+}
+
+fn collect_events<R: CuteAccess>(mut session: ResMut<R>, mut ui: ResMut<CuteUiState>) {
+    for event in session.cute_mut().take_events() {
+        ui.record(&event);
+    }
+}
+
+fn click_to_go<R: CuteAccess>(
+    buttons: Res<ButtonInput<MouseButton>>,
+    window: Single<&Window, With<PrimaryWindow>>,
+    view: Res<CuteView>,
+    mut session: ResMut<R>,
+    mut ui: ResMut<CuteUiState>,
+) {
+    if !buttons.just_pressed(MouseButton::Left) {
+        return;
+    }
+    let Some(cursor) = window.cursor_position() else {
+        return;
+    };
+    let map = session.cute().map();
+    let layout = MapLayout::compute(window_size(&window), &view, map.rows(), map.cols());
+    let Some((x, y)) = layout.cell_at(cursor) else {
+        return;
+    };
+    ui.notice = match session.cute_mut().go_to(x, y) {
+        Ok(()) => Some(format!("going to ({x}, {y})")),
+        // The session reports it as an event: a pop-up.
+        Err(PlanError::NoPath { .. }) => None,
+        Err(e) => Some(format!("cannot go to ({x}, {y}): {e}")),
+    };
+}
+
+fn window_size(window: &Window) -> Vec2 {
+    Vec2::new(window.width(), window.height())
+}
+
+fn update_map_sprite<R: CuteAccess>(
+    session: Res<R>,
+    window: Single<&Window, With<PrimaryWindow>>,
+    view: Res<CuteView>,
+    mut texture: ResMut<MapTexture>,
+    mut images: ResMut<Assets<Image>>,
+    mut sprite: Single<(&mut Sprite, &mut Transform, &mut Visibility), With<MapSprite>>,
+) {
+    let map = session.cute().map();
+    let (rows, cols) = (map.rows(), map.cols());
+    if texture.size != (rows, cols) {
+        let handle = images.add(map_image(rows, cols));
+        sprite.0.image = handle.clone();
+        texture.handle = handle;
+        texture.size = (rows, cols);
+        texture.shown.clear();
+    }
+    if texture.shown != map.cells() {
+        if let Some(mut image) = images.get_mut(&texture.handle) {
+            let data: Vec<u8> = map
+                .cells()
+                .iter()
+                .flat_map(|&v| {
+                    let [r, g, b] = cell_rgb(v);
+                    [r, g, b, 255]
+                })
+                .collect();
+            image.data = Some(data);
+        }
+        texture.shown = map.cells().to_vec();
+    }
+    let size = window_size(&window);
+    let layout = MapLayout::compute(size, &view, rows, cols);
+    let rect = layout.map_rect();
+    sprite.0.custom_size = Some(rect.size());
+    let centre = logical_to_world(size, rect.center());
+    *sprite.1 = Transform::from_translation(Vec3::new(centre.x, centre.y, 0.0));
+    *sprite.2 = Visibility::Inherited;
+}
+
+fn heading_vector(h: Heading) -> Vec2 {
+    // Logical pixels: x right, y down.
+    match h {
+        Heading::South => Vec2::new(0.0, 1.0),
+        Heading::North => Vec2::new(0.0, -1.0),
+        Heading::West => Vec2::new(-1.0, 0.0),
+        Heading::East => Vec2::new(1.0, 0.0),
+    }
+}
+
+fn draw_map_overlay<R: CuteAccess>(
+    session: Res<R>,
+    window: Single<&Window, With<PrimaryWindow>>,
+    view: Res<CuteView>,
+    mut gizmos: Gizmos,
+) {
+    let cute = session.cute();
+    let map = cute.map();
+    let size = window_size(&window);
+    let layout = MapLayout::compute(size, &view, map.rows(), map.cols());
+    let w = |p: Vec2| logical_to_world(size, p);
+    let rect = layout.map_rect();
+    if layout.cell >= 6.0 {
+        let grid = Color::srgb(0.55, 0.57, 0.62);
+        for row in 1..layout.rows {
+            let y = rect.min.y + row as f32 * layout.cell;
+            gizmos.line_2d(w(Vec2::new(rect.min.x, y)), w(Vec2::new(rect.max.x, y)), grid);
+        }
+        for col in 1..layout.cols {
+            let x = rect.min.x + col as f32 * layout.cell;
+            gizmos.line_2d(w(Vec2::new(x, rect.min.y)), w(Vec2::new(x, rect.max.y)), grid);
+        }
+    }
+    let border = Color::srgb(0.85, 0.87, 0.92);
+    gizmos.rect_2d(w(rect.center()), rect.size() + Vec2::splat(4.0), border);
+    // The robot: a ring and an arrow towards its heading.
+    let (x, y, heading) = cute.robot();
+    let cell = layout.cell_rect(usize::from(x), usize::from(y));
+    let c = cell.center();
+    let r = layout.cell * 0.36;
+    let white = Color::srgb(1.0, 1.0, 1.0);
+    gizmos.circle_2d(w(c), r, white);
+    let tip = c + heading_vector(heading) * layout.cell * 0.45;
+    gizmos.arrow_2d(w(c), w(tip), white).with_tip_length(layout.cell * 0.25);
+    // The destination: a ring, so it shows even under the robot.
+    if let Some((dx, dy)) = map.destination() {
+        let d = layout.cell_rect(usize::from(dx), usize::from(dy)).center();
+        gizmos.circle_2d(w(d), layout.cell * 0.3, Color::srgb(0.45, 0.2, 0.0));
+    }
+}
+
+fn status_text(cute: &Cute) -> String {
+    let link = if cute.is_ready() {
+        "connected"
+    } else if cute.is_connected() {
+        "connected, awaiting position ack"
+    } else {
+        "disconnected"
+    };
+    let status = match cute.status() {
+        Status::Idle => "idle",
+        Status::Mapping => "mapping",
+        Status::Moving => "moving",
+        Status::Done => "map complete",
+    };
+    let (x, y, h) = cute.robot();
+    let map = cute.map();
+    format!(
+        "{link} | {status} | robot ({x}, {y}) facing {h} | free {} obstacles {} unknown {}",
+        map.cells().iter().filter(|v| v.is_known_free()).count(),
+        map.count(CellValue::Obstacle),
+        map.count(CellValue::Unknown),
+    )
+}
+
+fn cute_toolbar<R: CuteAccess>(
+    mut contexts: EguiContexts,
+    mut session: ResMut<R>,
+    mut ui_state: ResMut<CuteUiState>,
+    view: Res<CuteView>,
+    window: Query<&Window, With<PrimaryWindow>>,
+) -> bevy::ecs::error::Result {
+    let Ok(window) = window.single() else {
+        return Ok(());
+    };
+    let ctx = contexts.ctx_mut()?;
+    let region = view.region_px(window_size(window));
+    let busy = matches!(session.cute().status(), Status::Mapping | Status::Moving);
+    let compat = session.cute().config().compat == Compat::Explobot2024;
+    egui::Area::new(egui::Id::new("cute-toolbar"))
+        .fixed_pos(egui::pos2(region.min.x + MAP_PADDING, region.min.y + 6.0))
+        .show(ctx, |ui| {
+            ui.set_max_width(region.width() - 2.0 * MAP_PADDING);
+            ui.horizontal(|ui| {
+                ui.strong("Cute");
+                let carto = ui
+                    .add_enabled(!busy && !compat, egui::Button::new("Cartography"))
+                    .on_hover_text("map the room (serpentine sweep)");
+                if carto.clicked() {
+                    ui_state.notice = session.cute_mut().start_cartography().err().map(|e| e.to_string());
+                }
+                if ui.button("Stop").clicked() {
+                    session.cute_mut().stop();
+                    ui_state.notice = None;
+                }
+                if ui.button("Reset map").clicked() {
+                    session.cute_mut().reset_map();
+                    ui_state.notice = Some("map reset".to_string());
+                }
+                ui.label("click a free cell to send the robot");
+            });
+            ui.label(status_text(session.cute()));
+            let last = ui_state.notice.clone().or_else(|| ui_state.log.back().cloned()).unwrap_or_default();
+            ui.label(egui::RichText::new(last).color(egui::Color32::from_rgb(250, 210, 120)));
+        });
+    if let Some(popup) = ui_state.popups.front().cloned() {
+        let offset = region.center() - window_size(window) * 0.5;
+        let mut close = false;
+        egui::Window::new(popup.title.as_str())
+            .id(egui::Id::new("cute-popup"))
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, [offset.x, offset.y])
+            .show(ctx, |ui| {
+                ui.label(popup.text.as_str());
+                if ui.button("OK").clicked() {
+                    close = true;
+                }
+            });
+        if close {
+            ui_state.popups.pop_front();
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Command;
+    use crate::session::Waiting;
+
+    #[test]
+    fn layout_fits_map_inside_region_below_toolbar() {
+        let view = CuteView { region: Rect::new(0.5, 0.0, 1.0, 1.0), inset_bottom: 30.0 };
+        let window = Vec2::new(1280.0, 720.0);
+        let l = MapLayout::compute(window, &view, 8, 10);
+        let r = l.map_rect();
+        assert!(r.min.x >= 640.0 + MAP_PADDING - 0.5, "{r:?}");
+        assert!(r.max.x <= 1280.0 - MAP_PADDING + 0.5, "{r:?}");
+        assert!(r.min.y >= TOOLBAR_HEIGHT + MAP_PADDING - 0.5, "{r:?}");
+        assert!(r.max.y <= 720.0 - 30.0 - MAP_PADDING + 0.5, "{r:?}");
+        assert_eq!(l.cell, l.cell.floor());
+        // Width-limited: 10 columns over 620 px.
+        assert_eq!(l.cell, 62.0);
+    }
+
+    #[test]
+    fn cell_at_inverts_cell_rect_and_rejects_outside() {
+        let l = MapLayout::compute(Vec2::new(800.0, 600.0), &CuteView::default(), 20, 20);
+        for (row, col) in [(0, 0), (19, 19), (7, 13)] {
+            let r = l.cell_rect(row, col);
+            assert_eq!(l.cell_at(r.center()), Some((row as u8, col as u8)));
+            assert_eq!(l.cell_at(r.min + Vec2::splat(0.01)), Some((row as u8, col as u8)));
+        }
+        let m = l.map_rect();
+        assert_eq!(l.cell_at(m.min - Vec2::splat(1.0)), None);
+        assert_eq!(l.cell_at(m.max + Vec2::splat(1.0)), None);
+        assert_eq!(l.cell_at(Vec2::new(m.max.x + 0.5, m.center().y)), None);
+    }
+
+    #[test]
+    fn tiny_windows_still_give_positive_cells() {
+        let l = MapLayout::compute(Vec2::new(50.0, 40.0), &CuteView::default(), 256, 256);
+        assert!(l.cell > 0.0);
+        assert!(l.map_rect().width() > 0.0);
+    }
+
+    #[test]
+    fn logical_to_world_puts_origin_at_window_centre() {
+        let win = Vec2::new(1280.0, 720.0);
+        assert_eq!(logical_to_world(win, Vec2::new(640.0, 360.0)), Vec2::ZERO);
+        assert_eq!(logical_to_world(win, Vec2::new(0.0, 0.0)), Vec2::new(-640.0, 360.0));
+        assert_eq!(logical_to_world(win, Vec2::new(1280.0, 720.0)), Vec2::new(640.0, -360.0));
+    }
+
+    #[test]
+    fn colours_follow_the_original_cute() {
+        let lum = |v| {
+            let [r, g, b] = cell_rgb(v);
+            u32::from(r) + u32::from(g) + u32::from(b)
+        };
+        assert!(lum(CellValue::Obstacle) < 100);
+        assert!(lum(CellValue::Free) > 450);
+        assert!(lum(CellValue::Unknown) > lum(CellValue::Free));
+        let [r, g, b] = cell_rgb(CellValue::Robot);
+        assert!(b > r && b > g);
+        let [r, g, b] = cell_rgb(CellValue::Waypoint);
+        assert!(r > 200 && g < 100 && b < 100);
+        let [r, g, _] = cell_rgb(CellValue::Destination);
+        assert!(r > 200 && g > 100);
+        // Every value is distinguishable.
+        let all = [0u8, 1, 2, 3, 4, 5].map(|v| CellValue::from_u8(v).map(cell_rgb));
+        for i in 0..all.len() {
+            for j in i + 1..all.len() {
+                assert_ne!(all[i], all[j]);
+            }
+        }
+    }
+
+    #[test]
+    fn popups_for_no_path_connection_lost_and_obstacle() {
+        assert_eq!(popup_for(&CuteEvent::NoPath { x: 1, y: 2 }).map(|p| p.title), Some("No path".into()));
+        assert_eq!(popup_for(&CuteEvent::ConnectionLost).map(|p| p.title), Some("Connection lost".into()));
+        let p = popup_for(&CuteEvent::ObstacleMet { x: 3, y: 4 }).unwrap();
+        assert!(p.text.contains("(3, 4)"));
+        assert!(popup_for(&CuteEvent::MoveTimeout { waiting_for: Waiting::MoveDone }).is_some());
+        assert!(popup_for(&CuteEvent::MoveRejected { command: Command::Forward }).is_some());
+        assert!(popup_for(&CuteEvent::Connected).is_none());
+        assert!(popup_for(&CuteEvent::Reached { x: 0, y: 0 }).is_none());
+        assert!(popup_for(&CuteEvent::ProtocolError { message: "x".into(), fatal: false }).is_none());
+    }
+
+    #[test]
+    fn ui_state_deduplicates_waiting_popups_and_bounds_the_log() {
+        let mut s = CuteUiState::default();
+        s.record(&CuteEvent::ConnectionLost);
+        s.record(&CuteEvent::ConnectionLost);
+        assert_eq!(s.popups.len(), 1);
+        for i in 0..20 {
+            s.record(&CuteEvent::Reached { x: i, y: 0 });
+        }
+        assert_eq!(s.log.len(), LOG_LINES);
+        assert_eq!(s.log.back().map(String::as_str), Some("reached (19, 0)"));
+    }
+
+    #[test]
+    fn status_text_names_link_mission_and_counts() {
+        let cute = Cute::new(crate::session::CuteConfig { rows: 3, cols: 4, ..Default::default() }).unwrap();
+        let t = status_text(&cute);
+        assert!(t.starts_with("disconnected | idle | robot (0, 0) facing"), "{t}");
+        assert!(t.ends_with("free 1 obstacles 0 unknown 11"), "{t}");
+    }
+}

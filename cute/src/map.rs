@@ -1,0 +1,477 @@
+//! The operator's map: a `rows × cols` grid of [`CellValue`]s, at most 256 × 256.
+//!
+//! Concept: the map is what Cute knows about the room. Every cell starts unknown (2). Cartography
+//! turns cells into free (1) or obstacle (0); a planned trajectory paints waypoints (3) and the
+//! destination (4); the robot's cell shows 5. The numbers are Cute's `map.h` encoding (research
+//! §1.8), used whenever a map is written or read as numbers.
+//!
+//! Coordinates follow the `link` protocol: `x` is the row (grows downward), `y` the column
+//! (grows rightward), origin top-left, one byte each.
+//!
+//! Invariants: at most one cell holds [`CellValue::Robot`] and it is [`Map::robot`]; at most one
+//! holds [`CellValue::Destination`] and it is [`Map::destination`]; cells are stored and iterated
+//! in row-major order. Waypoint, destination and robot cells are known to be free.
+//!
+//! ```
+//! use cute::map::{CellValue, Map};
+//! let mut map = Map::new(3, 4).unwrap();
+//! assert_eq!(map.get(2, 3), Some(CellValue::Unknown));
+//! map.set(0, 1, CellValue::Obstacle).unwrap();
+//! map.set_robot(0, 0).unwrap();
+//! assert_eq!(map.to_text(), "5022\n2222\n2222\n");
+//! assert_eq!(Map::parse(&map.to_text()).unwrap(), map);
+//! ```
+
+use core::fmt;
+
+use thiserror::Error;
+
+/// The largest number of rows or columns (coordinates are one byte on the wire).
+pub const MAX_SIDE: usize = 256;
+
+/// What one cell of the map holds; the discriminant is Cute's number for it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[repr(u8)]
+pub enum CellValue {
+    /// 0: blocked, the robot cannot enter.
+    Obstacle = 0,
+    /// 1: free, the robot has been there (or it is known free).
+    Free = 1,
+    /// 2: not explored yet (the initial value).
+    #[default]
+    Unknown = 2,
+    /// 3: a free cell on the planned trajectory.
+    Waypoint = 3,
+    /// 4: the trajectory's destination.
+    Destination = 4,
+    /// 5: the robot's cell.
+    Robot = 5,
+}
+
+impl CellValue {
+    /// Cute's number for this value (0..=5).
+    pub const fn as_u8(self) -> u8 {
+        self as u8
+    }
+
+    /// The value for a number, `None` above 5.
+    pub const fn from_u8(v: u8) -> Option<CellValue> {
+        match v {
+            0 => Some(CellValue::Obstacle),
+            1 => Some(CellValue::Free),
+            2 => Some(CellValue::Unknown),
+            3 => Some(CellValue::Waypoint),
+            4 => Some(CellValue::Destination),
+            5 => Some(CellValue::Robot),
+            _ => None,
+        }
+    }
+
+    /// True for cells known to be free: free, waypoint, destination and robot.
+    pub const fn is_known_free(self) -> bool {
+        matches!(self, CellValue::Free | CellValue::Waypoint | CellValue::Destination | CellValue::Robot)
+    }
+
+    /// The digit used by [`Map::to_text`].
+    pub const fn to_char(self) -> char {
+        (b'0' + self as u8) as char
+    }
+}
+
+impl From<CellValue> for u8 {
+    fn from(v: CellValue) -> u8 {
+        v.as_u8()
+    }
+}
+
+impl TryFrom<u8> for CellValue {
+    type Error = MapError;
+    fn try_from(v: u8) -> Result<CellValue, MapError> {
+        CellValue::from_u8(v).ok_or(MapError::BadValue { value: v })
+    }
+}
+
+/// Why a map operation or a map text was refused.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[non_exhaustive]
+pub enum MapError {
+    /// A side is zero or above [`MAX_SIDE`].
+    #[error("map size {rows}x{cols} is outside 1..=256 per side")]
+    BadSize {
+        /// Requested rows.
+        rows: usize,
+        /// Requested columns.
+        cols: usize,
+    },
+    /// A coordinate lies outside the map.
+    #[error("cell ({x}, {y}) is outside the {rows}x{cols} map")]
+    OutOfBounds {
+        /// Row.
+        x: usize,
+        /// Column.
+        y: usize,
+        /// Map rows.
+        rows: usize,
+        /// Map columns.
+        cols: usize,
+    },
+    /// A number that is not a cell value.
+    #[error("{value} is not a cell value (0..=5)")]
+    BadValue {
+        /// The number.
+        value: u8,
+    },
+    /// A map text line has a character that is not a digit 0..=5.
+    #[error("line {line}: {found:?} is not a cell value (0..=5)")]
+    BadChar {
+        /// 1-based line number in the text.
+        line: usize,
+        /// The offending character.
+        found: char,
+    },
+    /// A map text line has a different length from the first row.
+    #[error("line {line}: {got} cells, expected {expected}")]
+    RaggedRow {
+        /// 1-based line number in the text.
+        line: usize,
+        /// Cells on that line.
+        got: usize,
+        /// Cells on the first row.
+        expected: usize,
+    },
+    /// A map text holds more than one robot or destination cell.
+    #[error("line {line}: a second {what} cell")]
+    Duplicate {
+        /// 1-based line number in the text.
+        line: usize,
+        /// "robot" or "destination".
+        what: &'static str,
+    },
+}
+
+/// A `rows × cols` grid of cell values with the robot and destination markers.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Map {
+    rows: usize,
+    cols: usize,
+    cells: Vec<CellValue>,
+    robot: Option<(u8, u8)>,
+    destination: Option<(u8, u8)>,
+}
+
+impl Map {
+    /// A map of `rows × cols` unknown cells; each side must be in `1..=256`.
+    pub fn new(rows: usize, cols: usize) -> Result<Map, MapError> {
+        if rows == 0 || cols == 0 || rows > MAX_SIDE || cols > MAX_SIDE {
+            return Err(MapError::BadSize { rows, cols });
+        }
+        Ok(Map { rows, cols, cells: vec![CellValue::Unknown; rows * cols], robot: None, destination: None })
+    }
+
+    /// Number of rows (the `x` range).
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Number of columns (the `y` range).
+    pub fn cols(&self) -> usize {
+        self.cols
+    }
+
+    /// True if `(x, y)` lies on the map.
+    pub fn contains(&self, x: usize, y: usize) -> bool {
+        x < self.rows && y < self.cols
+    }
+
+    /// The row-major index of `(x, y)`, `None` outside the map.
+    pub fn index(&self, x: usize, y: usize) -> Option<usize> {
+        self.contains(x, y).then_some(x * self.cols + y)
+    }
+
+    /// The value at `(x, y)`, `None` outside the map.
+    pub fn get(&self, x: usize, y: usize) -> Option<CellValue> {
+        self.index(x, y).map(|i| self.cells[i])
+    }
+
+    /// The value at `(x, y)` given as wire bytes, `None` outside the map.
+    pub fn at(&self, cell: (u8, u8)) -> Option<CellValue> {
+        self.get(usize::from(cell.0), usize::from(cell.1))
+    }
+
+    /// All cells in row-major order.
+    pub fn cells(&self) -> &[CellValue] {
+        &self.cells
+    }
+
+    /// The cells of row `x`, `None` outside the map.
+    pub fn row(&self, x: usize) -> Option<&[CellValue]> {
+        (x < self.rows).then(|| &self.cells[x * self.cols..(x + 1) * self.cols])
+    }
+
+    /// Every cell with its coordinates, in row-major order.
+    pub fn iter(&self) -> impl Iterator<Item = ((u8, u8), CellValue)> + '_ {
+        let cols = self.cols;
+        // Both sides are at most 256, so the quotient and remainder fit a byte.
+        self.cells.iter().enumerate().map(move |(i, v)| (((i / cols) as u8, (i % cols) as u8), *v))
+    }
+
+    /// How many cells hold `value`.
+    pub fn count(&self, value: CellValue) -> usize {
+        self.cells.iter().filter(|v| **v == value).count()
+    }
+
+    fn checked_index(&self, x: usize, y: usize) -> Result<usize, MapError> {
+        self.index(x, y).ok_or(MapError::OutOfBounds { x, y, rows: self.rows, cols: self.cols })
+    }
+
+    /// Writes `value` at `(x, y)`, keeping the robot and destination markers consistent.
+    ///
+    /// Writing [`CellValue::Robot`] or [`CellValue::Destination`] moves that marker (the old
+    /// cell becomes free); overwriting the marker's cell with anything else drops the marker.
+    pub fn set(&mut self, x: usize, y: usize, value: CellValue) -> Result<(), MapError> {
+        let i = self.checked_index(x, y)?;
+        // In bounds, so both fit a byte.
+        let here = (x as u8, y as u8);
+        match value {
+            CellValue::Robot => return self.set_robot(x, y),
+            CellValue::Destination => return self.set_destination(x, y),
+            _ => {}
+        }
+        if self.robot == Some(here) {
+            self.robot = None;
+        }
+        if self.destination == Some(here) {
+            self.destination = None;
+        }
+        self.cells[i] = value;
+        Ok(())
+    }
+
+    /// Marks `(x, y)` as an obstacle (0).
+    pub fn set_obstacle(&mut self, x: usize, y: usize) -> Result<(), MapError> {
+        self.set(x, y, CellValue::Obstacle)
+    }
+
+    /// Marks `(x, y)` as free (1).
+    pub fn set_free(&mut self, x: usize, y: usize) -> Result<(), MapError> {
+        self.set(x, y, CellValue::Free)
+    }
+
+    /// Marks `(x, y)` as a waypoint (3).
+    pub fn set_waypoint(&mut self, x: usize, y: usize) -> Result<(), MapError> {
+        self.set(x, y, CellValue::Waypoint)
+    }
+
+    /// Moves the robot marker (5) to `(x, y)`; its previous cell becomes free (1).
+    pub fn set_robot(&mut self, x: usize, y: usize) -> Result<(), MapError> {
+        let i = self.checked_index(x, y)?;
+        if let Some((ox, oy)) = self.robot.take() {
+            let o = usize::from(ox) * self.cols + usize::from(oy);
+            self.cells[o] = CellValue::Free;
+        }
+        if self.destination == Some((x as u8, y as u8)) {
+            self.destination = None;
+        }
+        self.cells[i] = CellValue::Robot;
+        self.robot = Some((x as u8, y as u8));
+        Ok(())
+    }
+
+    /// The robot's cell, if one is marked.
+    pub fn robot(&self) -> Option<(u8, u8)> {
+        self.robot
+    }
+
+    /// Moves the destination marker (4) to `(x, y)`; its previous cell becomes free (1).
+    pub fn set_destination(&mut self, x: usize, y: usize) -> Result<(), MapError> {
+        let i = self.checked_index(x, y)?;
+        if let Some((ox, oy)) = self.destination.take() {
+            let o = usize::from(ox) * self.cols + usize::from(oy);
+            self.cells[o] = CellValue::Free;
+        }
+        if self.robot == Some((x as u8, y as u8)) {
+            self.robot = None;
+        }
+        self.cells[i] = CellValue::Destination;
+        self.destination = Some((x as u8, y as u8));
+        Ok(())
+    }
+
+    /// The destination's cell, if one is marked.
+    pub fn destination(&self) -> Option<(u8, u8)> {
+        self.destination
+    }
+
+    /// Turns every waypoint (3) and the destination (4) back into free cells (1).
+    pub fn clear_trajectory(&mut self) {
+        for v in &mut self.cells {
+            if matches!(v, CellValue::Waypoint | CellValue::Destination) {
+                *v = CellValue::Free;
+            }
+        }
+        self.destination = None;
+    }
+
+    /// Sets every cell back to unknown (2) and drops both markers (the RESET button).
+    pub fn reset(&mut self) {
+        self.cells.fill(CellValue::Unknown);
+        self.robot = None;
+        self.destination = None;
+    }
+
+    /// The map as text: one line per row, one digit (the cell's number) per cell.
+    pub fn to_text(&self) -> String {
+        let mut s = String::with_capacity(self.rows * (self.cols + 1));
+        for x in 0..self.rows {
+            for v in &self.cells[x * self.cols..(x + 1) * self.cols] {
+                s.push(v.to_char());
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Parses [`Map::to_text`]'s format. Blank lines and lines starting with `#` are skipped;
+    /// spaces and commas between digits are ignored. Errors name the 1-based line.
+    pub fn parse(text: &str) -> Result<Map, MapError> {
+        let mut rows: Vec<Vec<CellValue>> = Vec::new();
+        let mut robot = None;
+        let mut destination = None;
+        let mut first_len = 0;
+        for (n, line) in text.lines().enumerate() {
+            let line_no = n + 1;
+            let trimmed = line.trim();
+            if trimmed.is_empty() || trimmed.starts_with('#') {
+                continue;
+            }
+            let mut row = Vec::with_capacity(trimmed.len());
+            for ch in trimmed.chars() {
+                if ch == ' ' || ch == ',' {
+                    continue;
+                }
+                let v = ch
+                    .to_digit(10)
+                    .and_then(|d| CellValue::from_u8(d as u8))
+                    .ok_or(MapError::BadChar { line: line_no, found: ch })?;
+                let here = (rows.len(), row.len());
+                if v == CellValue::Robot && robot.replace(here).is_some() {
+                    return Err(MapError::Duplicate { line: line_no, what: "robot" });
+                }
+                if v == CellValue::Destination && destination.replace(here).is_some() {
+                    return Err(MapError::Duplicate { line: line_no, what: "destination" });
+                }
+                row.push(v);
+            }
+            if rows.is_empty() {
+                first_len = row.len();
+            } else if row.len() != first_len {
+                return Err(MapError::RaggedRow { line: line_no, got: row.len(), expected: first_len });
+            }
+            rows.push(row);
+        }
+        let mut map = Map::new(rows.len(), first_len)?;
+        for (x, row) in rows.into_iter().enumerate() {
+            map.cells[x * first_len..(x + 1) * first_len].copy_from_slice(&row);
+        }
+        map.robot = robot.map(|(x, y)| (x as u8, y as u8));
+        map.destination = destination.map(|(x, y)| (x as u8, y as u8));
+        Ok(map)
+    }
+}
+
+impl fmt::Display for Map {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.to_text())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn new_map_is_all_unknown_and_sized() {
+        let map = Map::new(4, 7).unwrap();
+        assert_eq!((map.rows(), map.cols()), (4, 7));
+        assert_eq!(map.count(CellValue::Unknown), 28);
+        assert_eq!(map.get(4, 0), None);
+        assert_eq!(map.get(0, 7), None);
+        assert!(Map::new(256, 256).is_ok());
+        assert_eq!(Map::new(0, 3), Err(MapError::BadSize { rows: 0, cols: 3 }));
+        assert_eq!(Map::new(3, 257), Err(MapError::BadSize { rows: 3, cols: 257 }));
+    }
+
+    #[test]
+    fn values_convert_to_and_from_numbers() {
+        for n in 0..=5u8 {
+            let v = CellValue::try_from(n).unwrap();
+            assert_eq!(u8::from(v), n);
+        }
+        assert_eq!(CellValue::try_from(6), Err(MapError::BadValue { value: 6 }));
+        assert!(CellValue::Robot.is_known_free());
+        assert!(!CellValue::Unknown.is_known_free());
+        assert!(!CellValue::Obstacle.is_known_free());
+    }
+
+    #[test]
+    fn iteration_is_row_major() {
+        let mut map = Map::new(2, 3).unwrap();
+        map.set(1, 0, CellValue::Obstacle).unwrap();
+        let cells: Vec<_> = map.iter().map(|(c, _)| c).collect();
+        assert_eq!(cells, vec![(0, 0), (0, 1), (0, 2), (1, 0), (1, 1), (1, 2)]);
+        assert_eq!(map.iter().nth(3), Some(((1, 0), CellValue::Obstacle)));
+        assert_eq!(map.row(1).unwrap()[0], CellValue::Obstacle);
+    }
+
+    #[test]
+    fn robot_and_destination_markers_stay_unique() {
+        let mut map = Map::new(3, 3).unwrap();
+        map.set_robot(0, 0).unwrap();
+        map.set_robot(0, 1).unwrap();
+        assert_eq!(map.get(0, 0), Some(CellValue::Free));
+        assert_eq!(map.count(CellValue::Robot), 1);
+        map.set(2, 2, CellValue::Destination).unwrap();
+        map.set_destination(1, 1).unwrap();
+        assert_eq!(map.get(2, 2), Some(CellValue::Free));
+        assert_eq!(map.destination(), Some((1, 1)));
+        map.set_waypoint(1, 0).unwrap();
+        map.clear_trajectory();
+        assert_eq!(map.count(CellValue::Waypoint) + map.count(CellValue::Destination), 0);
+        assert_eq!(map.destination(), None);
+        assert_eq!(map.robot(), Some((0, 1)));
+        map.set_obstacle(0, 1).unwrap();
+        assert_eq!(map.robot(), None);
+    }
+
+    #[test]
+    fn reset_sets_everything_unknown() {
+        let mut map = Map::parse("5100\n0014\n").unwrap();
+        map.reset();
+        assert_eq!(map.count(CellValue::Unknown), 8);
+        assert_eq!((map.robot(), map.destination()), (None, None));
+    }
+
+    #[test]
+    fn out_of_bounds_writes_are_errors() {
+        let mut map = Map::new(2, 2).unwrap();
+        assert_eq!(
+            map.set(2, 0, CellValue::Free),
+            Err(MapError::OutOfBounds { x: 2, y: 0, rows: 2, cols: 2 })
+        );
+        assert!(map.set_robot(0, 2).is_err());
+    }
+
+    #[test]
+    fn text_round_trip_and_errors() {
+        let text = "# reference vector 1\n5111\n0201\n0001\n0004\n";
+        let map = Map::parse(text).unwrap();
+        assert_eq!(map.robot(), Some((0, 0)));
+        assert_eq!(map.destination(), Some((3, 3)));
+        assert_eq!(map.to_text(), "5111\n0201\n0001\n0004\n");
+        assert_eq!(Map::parse("1,1,1\n0 0 0\n").unwrap().cols(), 3);
+        assert_eq!(Map::parse("11\n1x\n"), Err(MapError::BadChar { line: 2, found: 'x' }));
+        assert_eq!(Map::parse("11\n111\n"), Err(MapError::RaggedRow { line: 2, got: 3, expected: 2 }));
+        assert_eq!(Map::parse("55\n"), Err(MapError::Duplicate { line: 1, what: "robot" }));
+        assert!(matches!(Map::parse(""), Err(MapError::BadSize { .. })));
+    }
+}

@@ -1,0 +1,252 @@
+//! The planning grid laid over a room, and the ground truth Cute's map is scored against.
+//!
+//! The grid covers the room's bounding box with whole cells; what is left over is split evenly
+//! as a margin on each side. Row 0 is the top row (largest world `y`), column 0 the leftmost. A
+//! cell is **free** in the ground truth when its square lies inside the room and touches no
+//! obstacle; **reachable** cells are the free cells 4-connected to the start cell.
+
+use std::collections::VecDeque;
+
+use rapier2d::parry::math::{Pose, Vector};
+use rapier2d::parry::query;
+use rapier2d::parry::shape::{Ball, ConvexPolygon, Cuboid, Segment, Shape};
+use robot_model::profile::RobotProfile;
+
+use crate::scenario::{Obstacle, Scenario};
+
+/// Largest grid side: coordinates travel as one byte on the link protocol.
+pub const MAX_CELLS: usize = 256;
+
+/// Where the grid sits in the world.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridFrame {
+    /// World x of the left edge of column 0.
+    pub left: f32,
+    /// World y of the top edge of row 0.
+    pub top: f32,
+    /// Cell side, metres.
+    pub cell: f32,
+    /// Number of rows.
+    pub rows: usize,
+    /// Number of columns.
+    pub cols: usize,
+}
+
+impl GridFrame {
+    /// The grid for `room` (a polygon) with cells of `cell` metres.
+    pub fn for_room(room: &[(f32, f32)], cell: f32) -> GridFrame {
+        let (mut min_x, mut min_y, mut max_x, mut max_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+        for &(x, y) in room {
+            min_x = min_x.min(x);
+            max_x = max_x.max(x);
+            min_y = min_y.min(y);
+            max_y = max_y.max(y);
+        }
+        let width = (max_x - min_x).max(0.0);
+        let height = (max_y - min_y).max(0.0);
+        let cols = ((width / cell + 1e-4).floor() as usize).min(MAX_CELLS);
+        let rows = ((height / cell + 1e-4).floor() as usize).min(MAX_CELLS);
+        let margin_x = (width - cols as f32 * cell) * 0.5;
+        let margin_y = (height - rows as f32 * cell) * 0.5;
+        GridFrame { left: min_x + margin_x, top: max_y - margin_y, cell, rows, cols }
+    }
+
+    /// World coordinates of the centre of (row, col).
+    pub fn cell_center(&self, row: usize, col: usize) -> (f32, f32) {
+        (self.left + (col as f32 + 0.5) * self.cell, self.top - (row as f32 + 0.5) * self.cell)
+    }
+
+    /// The cell containing world point (x, y), if it is on the grid.
+    pub fn cell_at(&self, x: f32, y: f32) -> Option<(usize, usize)> {
+        let col = ((x - self.left) / self.cell).floor();
+        let row = ((self.top - y) / self.cell).floor();
+        if col < 0.0 || row < 0.0 {
+            return None;
+        }
+        let (row, col) = (row as usize, col as usize);
+        (row < self.rows && col < self.cols).then_some((row, col))
+    }
+}
+
+/// Which cells of the grid are free in the real room.
+#[derive(Debug, Clone)]
+pub struct TruthGrid {
+    /// The grid's placement.
+    pub frame: GridFrame,
+    /// Number of rows.
+    pub rows: usize,
+    /// Number of columns.
+    pub cols: usize,
+    free: Vec<bool>,
+}
+
+impl TruthGrid {
+    /// Rasterises the scenario's room and obstacles.
+    pub fn build(scenario: &Scenario, profile: &RobotProfile) -> TruthGrid {
+        let frame = GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
+        let shapes: Vec<(Pose, Box<dyn Shape>)> =
+            scenario.obstacles.iter().filter_map(obstacle_shape).collect();
+        let walls: Vec<Segment> = room_edges(&scenario.room).collect();
+        // Obstacles are tested against the closed cell square: a thin wall lying on the edge
+        // between two cells blocks both, as the robot cannot cross it. The room's own walls are
+        // tested against a square shrunk by 1 mm, so a room that is a whole number of cells wide
+        // keeps its edge cells.
+        let half = frame.cell * 0.5 - 1e-3;
+        let square = Cuboid::new(Vector::new(half, half));
+        let closed = Cuboid::new(Vector::new(frame.cell * 0.5, frame.cell * 0.5));
+        let identity = Pose::IDENTITY;
+        let mut free = Vec::with_capacity(frame.rows * frame.cols);
+        for row in 0..frame.rows {
+            for col in 0..frame.cols {
+                let (cx, cy) = frame.cell_center(row, col);
+                let at = Pose::from_translation(Vector::new(cx, cy));
+                let inside = [(-half, -half), (half, -half), (half, half), (-half, half)]
+                    .iter()
+                    .all(|&(dx, dy)| point_in_polygon(&scenario.room, cx + dx, cy + dy));
+                let crosses_wall = walls.iter().any(|w| intersects(&at, &square, &identity, w));
+                let hits_obstacle = shapes.iter().any(|(pose, s)| intersects(&at, &closed, pose, s.as_ref()));
+                free.push(inside && !crosses_wall && !hits_obstacle);
+            }
+        }
+        TruthGrid { frame, rows: frame.rows, cols: frame.cols, free }
+    }
+
+    /// Whether (row, col) is on the grid and free.
+    pub fn is_free(&self, row: usize, col: usize) -> bool {
+        row < self.rows && col < self.cols && self.free[row * self.cols + col]
+    }
+
+    /// For every cell, whether it is free and 4-connected to `start`; row-major.
+    pub fn reachable_from(&self, start: (usize, usize)) -> Vec<bool> {
+        let mut seen = vec![false; self.rows * self.cols];
+        if !self.is_free(start.0, start.1) {
+            return seen;
+        }
+        let mut queue = VecDeque::from([start]);
+        seen[start.0 * self.cols + start.1] = true;
+        while let Some((r, c)) = queue.pop_front() {
+            let neighbours = [(r.wrapping_sub(1), c), (r + 1, c), (r, c.wrapping_sub(1)), (r, c + 1)];
+            for (nr, nc) in neighbours {
+                if self.is_free(nr, nc) && !seen[nr * self.cols + nc] {
+                    seen[nr * self.cols + nc] = true;
+                    queue.push_back((nr, nc));
+                }
+            }
+        }
+        seen
+    }
+}
+
+/// Whether two shapes overlap; a pair parry cannot test counts as overlapping (safe side).
+fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
+    query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
+}
+
+/// The room polygon's edges as segments.
+pub fn room_edges(room: &[(f32, f32)]) -> impl Iterator<Item = Segment> + '_ {
+    (0..room.len()).map(move |i| {
+        let (x0, y0) = room[i];
+        let (x1, y1) = room[(i + 1) % room.len()];
+        Segment::new(Vector::new(x0, y0), Vector::new(x1, y1))
+    })
+}
+
+/// The collision shape and placement of an obstacle (`None` for a degenerate polygon).
+pub fn obstacle_shape(o: &Obstacle) -> Option<(Pose, Box<dyn Shape>)> {
+    match o {
+        Obstacle::Box { center, size, angle_deg } => Some((
+            Pose::new(Vector::new(center.0, center.1), angle_deg.to_radians()),
+            Box::new(Cuboid::new(Vector::new(size.0 * 0.5, size.1 * 0.5))),
+        )),
+        Obstacle::Circle { center, radius } => {
+            Some((Pose::from_translation(Vector::new(center.0, center.1)), Box::new(Ball::new(*radius))))
+        }
+        Obstacle::Segment { from, to } => Some((
+            Pose::IDENTITY,
+            Box::new(Segment::new(Vector::new(from.0, from.1), Vector::new(to.0, to.1))),
+        )),
+        Obstacle::Polygon { points } => {
+            let pts: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
+            ConvexPolygon::from_convex_hull(&pts).map(|p| (Pose::IDENTITY, Box::new(p) as Box<dyn Shape>))
+        }
+    }
+}
+
+/// Even-odd point-in-polygon test.
+pub fn point_in_polygon(poly: &[(f32, f32)], x: f32, y: f32) -> bool {
+    let mut inside = false;
+    let n = poly.len();
+    let mut j = n.wrapping_sub(1);
+    for i in 0..n {
+        let (xi, yi) = poly[i];
+        let (xj, yj) = poly[j];
+        if (yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi {
+            inside = !inside;
+        }
+        j = i;
+    }
+    inside
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::Scenario;
+
+    fn scenario(obstacles: &str) -> Scenario {
+        let text = format!(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)], \
+             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
+        );
+        Scenario::from_ron_str(&text, "t.ron").unwrap()
+    }
+
+    #[test]
+    fn grid_is_centred_in_the_room_with_whole_cells() {
+        let s = scenario("");
+        let g = TruthGrid::build(&s, &RobotProfile::default());
+        assert_eq!((g.rows, g.cols), (3, 4));
+        assert!((g.frame.left - 0.05).abs() < 1e-5);
+        assert!((g.frame.top - 0.925).abs() < 1e-5);
+        assert_eq!(g.frame.cell_at(0.06, 0.9), Some((0, 0)));
+        assert_eq!(g.frame.cell_at(1.24, 0.03), Some((2, 3)));
+        assert_eq!(g.frame.cell_at(1.29, 0.5), None);
+        assert!((0..3).all(|r| (0..4).all(|c| g.is_free(r, c))));
+    }
+
+    #[test]
+    fn obstacles_block_the_cells_they_touch() {
+        // A box over the centre of cell (1, 1) and a leg straddling cells (0, 2) and (0, 3).
+        let s = scenario(
+            "Box(center: (0.5, 0.475), size: (0.1, 0.1)), Circle(center: (0.65, 0.8), radius: 0.02)",
+        );
+        let g = TruthGrid::build(&s, &RobotProfile::default());
+        assert!(!g.is_free(1, 1));
+        assert!(!g.is_free(0, 1) || !g.is_free(0, 2));
+        assert!(g.is_free(2, 3));
+        let reach = g.reachable_from((0, 0));
+        assert!(!reach[g.cols + 1]);
+        assert!(reach[2 * g.cols + 3]);
+    }
+
+    #[test]
+    fn a_thin_wall_on_a_cell_edge_blocks_both_cells() {
+        let s = scenario("Segment(from: (0.65, 0.0), to: (0.65, 0.95))");
+        let g = TruthGrid::build(&s, &RobotProfile::default());
+        assert!((0..3).all(|r| !g.is_free(r, 1) && !g.is_free(r, 2)));
+        assert!(!g.reachable_from((0, 0))[3]);
+    }
+
+    #[test]
+    fn an_enclosed_pocket_is_free_but_unreachable() {
+        // Walls around cell (2, 3), the bottom-right corner cell (x 0.95..1.25, y 0.025..0.325),
+        // standing in its neighbours (2, 2) and (1, 3).
+        let s = scenario(
+            "Segment(from: (0.94, 0.0), to: (0.94, 0.335)), Segment(from: (0.94, 0.335), to: (1.3, 0.335))",
+        );
+        let g = TruthGrid::build(&s, &RobotProfile::default());
+        assert!(g.is_free(2, 3));
+        assert!(!g.is_free(2, 2) && !g.is_free(1, 3));
+        assert!(!g.reachable_from((0, 0))[2 * g.cols + 3]);
+    }
+}

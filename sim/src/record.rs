@@ -1,0 +1,284 @@
+//! Recordings: every byte on every link of a run, with its time, in a bincode file
+//! (`runs/NAME/links.rec`), plus what is needed to run the same scenario again.
+//!
+//! `explobot replay FILE` re-runs the recorded scenario with the recorded seed and profile and
+//! reports the first place where the new byte log differs from the recorded one. A run is
+//! deterministic, so a divergence means the code changed behaviour (or the recording is from
+//! another version).
+
+use std::fmt;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+/// Recording format version; bumped when the layout changes.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// Which way bytes went, seen from the endpoint that recorded them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Dir {
+    /// Bytes the endpoint read.
+    Read,
+    /// Bytes the endpoint wrote.
+    Write,
+}
+
+/// One burst of bytes at one time.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Chunk {
+    /// Run time, µs.
+    pub micros: u64,
+    /// Read or written.
+    pub dir: Dir,
+    /// The bytes.
+    pub bytes: Vec<u8>,
+}
+
+/// All traffic at one endpoint of one link (e.g. `motor` at `carto`).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct EndpointLog {
+    /// The link: `motor`, `sensor` or `gui`.
+    pub link: String,
+    /// The endpoint: `carto`, `board` or `cute`.
+    pub endpoint: String,
+    /// Its traffic in time order.
+    pub chunks: Vec<Chunk>,
+}
+
+/// A whole run's byte log and how to reproduce it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Recording {
+    /// [`FORMAT_VERSION`] at the time of writing.
+    pub version: u32,
+    /// Where the scenario came from (for messages).
+    pub scenario_label: String,
+    /// The scenario file's text.
+    pub scenario_ron: String,
+    /// The robot profile actually used (after the scenario's overrides), as RON.
+    pub profile_ron: String,
+    /// The seed used.
+    pub seed: u64,
+    /// Every endpoint's traffic.
+    pub logs: Vec<EndpointLog>,
+}
+
+/// A recording that could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    /// File system error.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS error.
+        source: std::io::Error,
+    },
+    /// Not a recording, or a damaged one.
+    #[error("{path}: not a valid recording: {message}")]
+    Decode {
+        /// The file.
+        path: String,
+        /// What the decoder said.
+        message: String,
+    },
+    /// A recording of another format version.
+    #[error("{path}: recording format {found}, this build reads {FORMAT_VERSION}")]
+    Version {
+        /// The file.
+        path: String,
+        /// The version in the file.
+        found: u32,
+    },
+}
+
+impl Recording {
+    /// Writes the recording to `path`.
+    pub fn save(&self, path: &Path) -> Result<(), RecordingError> {
+        let bytes = bincode::serde::encode_to_vec(self, bincode::config::standard()).map_err(|e| {
+            RecordingError::Decode { path: path.display().to_string(), message: e.to_string() }
+        })?;
+        std::fs::write(path, bytes)
+            .map_err(|source| RecordingError::Io { path: path.display().to_string(), source })
+    }
+
+    /// Reads a recording from `path`.
+    pub fn load(path: &Path) -> Result<Recording, RecordingError> {
+        let label = path.display().to_string();
+        let bytes =
+            std::fs::read(path).map_err(|source| RecordingError::Io { path: label.clone(), source })?;
+        let (rec, _): (Recording, usize) =
+            bincode::serde::decode_from_slice(&bytes, bincode::config::standard())
+                .map_err(|e| RecordingError::Decode { path: label.clone(), message: e.to_string() })?;
+        if rec.version != FORMAT_VERSION {
+            return Err(RecordingError::Version { path: label, found: rec.version });
+        }
+        Ok(rec)
+    }
+
+    /// SHA-256 over every chunk of every endpoint (names, times, directions and bytes).
+    pub fn link_hash(&self) -> String {
+        hash_logs(&self.logs)
+    }
+}
+
+/// SHA-256 over a set of endpoint logs, hex.
+pub fn hash_logs(logs: &[EndpointLog]) -> String {
+    let mut h = Sha256::new();
+    for log in logs {
+        h.update(log.link.as_bytes());
+        h.update([0]);
+        h.update(log.endpoint.as_bytes());
+        h.update([0]);
+        for c in &log.chunks {
+            h.update(c.micros.to_le_bytes());
+            h.update([matches!(c.dir, Dir::Write) as u8]);
+            h.update((c.bytes.len() as u64).to_le_bytes());
+            h.update(&c.bytes);
+        }
+    }
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Where two byte logs first differ.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Divergence {
+    /// Link and endpoint, e.g. `motor@carto`.
+    pub endpoint: String,
+    /// Direction at that endpoint.
+    pub dir: Dir,
+    /// Offset in that direction's byte stream.
+    pub offset: u64,
+    /// Time of the recorded byte (µs), if there was one.
+    pub recorded_micros: Option<u64>,
+    /// Time of the replayed byte (µs), if there was one.
+    pub replayed_micros: Option<u64>,
+    /// The recorded byte, if any.
+    pub recorded: Option<u8>,
+    /// The replayed byte, if any.
+    pub replayed: Option<u8>,
+}
+
+impl fmt::Display for Divergence {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let t = |m: Option<u64>| m.map_or("-".to_string(), |m| format!("{:.6} s", m as f64 * 1e-6));
+        let b = |v: Option<u8>| v.map_or("end of stream".to_string(), |v| format!("0x{v:02X}"));
+        write!(
+            f,
+            "{} {:?} byte {}: recorded {} at {}, replayed {} at {}",
+            self.endpoint,
+            self.dir,
+            self.offset,
+            b(self.recorded),
+            t(self.recorded_micros),
+            b(self.replayed),
+            t(self.replayed_micros)
+        )
+    }
+}
+
+/// The earliest (by time) first difference between `recorded` and `replayed`, comparing each
+/// endpoint's read and write streams byte by byte, with the time each byte was moved.
+pub fn first_divergence(recorded: &[EndpointLog], replayed: &[EndpointLog]) -> Option<Divergence> {
+    let mut found: Vec<Divergence> = Vec::new();
+    let names =
+        |logs: &[EndpointLog]| logs.iter().map(|l| (l.link.clone(), l.endpoint.clone())).collect::<Vec<_>>();
+    let mut all = names(recorded);
+    for n in names(replayed) {
+        if !all.contains(&n) {
+            all.push(n);
+        }
+    }
+    let empty = Vec::new();
+    for (link, endpoint) in all {
+        let a = chunks_of(recorded, &link, &endpoint).unwrap_or(&empty);
+        let b = chunks_of(replayed, &link, &endpoint).unwrap_or(&empty);
+        for dir in [Dir::Read, Dir::Write] {
+            let sa = flatten(a, dir);
+            let sb = flatten(b, dir);
+            let n = sa.len().max(sb.len());
+            if let Some(i) = (0..n).find(|&i| sa.get(i) != sb.get(i)) {
+                found.push(Divergence {
+                    endpoint: format!("{link}@{endpoint}"),
+                    dir,
+                    offset: i as u64,
+                    recorded_micros: sa.get(i).map(|x| x.0),
+                    replayed_micros: sb.get(i).map(|x| x.0),
+                    recorded: sa.get(i).map(|x| x.1),
+                    replayed: sb.get(i).map(|x| x.1),
+                });
+            }
+        }
+    }
+    found.into_iter().min_by_key(|d| d.recorded_micros.min(d.replayed_micros).unwrap_or(u64::MAX))
+}
+
+fn chunks_of<'a>(logs: &'a [EndpointLog], link: &str, endpoint: &str) -> Option<&'a Vec<Chunk>> {
+    logs.iter().find(|l| l.link == link && l.endpoint == endpoint).map(|l| &l.chunks)
+}
+
+fn flatten(chunks: &[Chunk], dir: Dir) -> Vec<(u64, u8)> {
+    chunks.iter().filter(|c| c.dir == dir).flat_map(|c| c.bytes.iter().map(move |&b| (c.micros, b))).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn log(chunks: Vec<(u64, Dir, &[u8])>) -> Vec<EndpointLog> {
+        vec![EndpointLog {
+            link: "motor".into(),
+            endpoint: "carto".into(),
+            chunks: chunks
+                .into_iter()
+                .map(|(micros, dir, b)| Chunk { micros, dir, bytes: b.to_vec() })
+                .collect(),
+        }]
+    }
+
+    #[test]
+    fn identical_logs_do_not_diverge_and_hash_equal() {
+        let a = log(vec![(0, Dir::Write, &[0xAA, 0x01]), (500, Dir::Read, &[1, 2, 3])]);
+        assert_eq!(first_divergence(&a, &a.clone()), None);
+        assert_eq!(hash_logs(&a), hash_logs(&a.clone()));
+    }
+
+    #[test]
+    fn a_changed_byte_is_found_at_its_offset_even_when_chunked_differently() {
+        let a = log(vec![(0, Dir::Write, &[1, 2]), (10, Dir::Write, &[3, 4])]);
+        let b = log(vec![(0, Dir::Write, &[1, 2]), (10, Dir::Write, &[3, 9])]);
+        let d = first_divergence(&a, &b).unwrap();
+        assert_eq!((d.offset, d.recorded, d.replayed, d.dir), (3, Some(4), Some(9), Dir::Write));
+        assert_ne!(hash_logs(&a), hash_logs(&b));
+    }
+
+    #[test]
+    fn a_shorter_replay_diverges_at_end_of_stream() {
+        let a = log(vec![(0, Dir::Read, &[1, 2, 3])]);
+        let b = log(vec![(0, Dir::Read, &[1, 2])]);
+        let d = first_divergence(&a, &b).unwrap();
+        assert_eq!((d.offset, d.replayed), (2, None));
+        assert!(d.to_string().contains("end of stream"));
+    }
+
+    #[test]
+    fn save_and_load_round_trip_and_bad_files_are_errors() {
+        let dir = std::env::temp_dir().join(format!("explobot-rec-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rec = Recording {
+            version: FORMAT_VERSION,
+            scenario_label: "x".into(),
+            scenario_ron: "Scenario()".into(),
+            profile_ron: "()".into(),
+            seed: 3,
+            logs: log(vec![(7, Dir::Write, &[0xAA])]),
+        };
+        let path = dir.join("a.rec");
+        rec.save(&path).unwrap();
+        assert_eq!(Recording::load(&path).unwrap(), rec);
+        std::fs::write(&path, b"\x01\x02garbage").unwrap();
+        assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
+        assert!(matches!(Recording::load(&dir.join("missing.rec")), Err(RecordingError::Io { .. })));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

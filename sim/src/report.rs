@@ -1,0 +1,280 @@
+//! The run report: what happened, how well the room was mapped, and whether the scenario's
+//! expectations hold.
+//!
+//! * **coverage** — of the cells reachable from the start (ground truth), the fraction Cute's map
+//!   shows as free;
+//! * **map accuracy** — of the cells Cute's map has classified (free or obstacle), the fraction
+//!   that agree with the ground truth; cells Cute never learnt about do not count here (they count
+//!   against coverage);
+//! * **collisions** — contact starts between the robot and anything (see [`crate::world`]).
+
+use std::fmt::Write as _;
+
+use serde::Serialize;
+
+use crate::grid::TruthGrid;
+use crate::scenario::Expectations;
+
+/// Traffic on one direction of one link.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct DirectionStats {
+    /// Bytes sent.
+    pub bytes: u64,
+    /// Frames the receiver decoded.
+    pub frames: u64,
+    /// Frames the receiver rejected (bad checksum, bad length, framing).
+    pub errors: u64,
+}
+
+/// Traffic on one link, both directions.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LinkStats {
+    /// `motor`, `sensor` or `gui`.
+    pub name: String,
+    /// From Carto to the board (or from Cute to Carto for `gui`).
+    pub outbound: DirectionStats,
+    /// From the board to Carto (or from Carto to Cute for `gui`).
+    pub inbound: DirectionStats,
+}
+
+/// One checked expectation.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Check {
+    /// The expectation's name in the scenario file.
+    pub name: String,
+    /// What the scenario asked for.
+    pub expected: String,
+    /// What the run achieved.
+    pub actual: String,
+    /// Whether it holds.
+    pub pass: bool,
+}
+
+/// How Cute's map compares with the true room.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct MapScore {
+    /// Reachable cells in the true room.
+    pub reachable: usize,
+    /// Reachable cells Cute shows as free.
+    pub reachable_known_free: usize,
+    /// Cells Cute has classified (free or obstacle).
+    pub classified: usize,
+    /// Classified cells that agree with the truth.
+    pub correct: usize,
+}
+
+impl MapScore {
+    /// Scores `known` (row-major; `Some(true)` free, `Some(false)` obstacle, `None` unknown).
+    pub fn score(truth: &TruthGrid, start: (usize, usize), known: &[Option<bool>]) -> MapScore {
+        let reachable = truth.reachable_from(start);
+        let mut s = MapScore::default();
+        for row in 0..truth.rows {
+            for col in 0..truth.cols {
+                let i = row * truth.cols + col;
+                let k = known.get(i).copied().flatten();
+                if reachable[i] {
+                    s.reachable += 1;
+                    if k == Some(true) {
+                        s.reachable_known_free += 1;
+                    }
+                }
+                if let Some(free) = k {
+                    s.classified += 1;
+                    if free == truth.is_free(row, col) {
+                        s.correct += 1;
+                    }
+                }
+            }
+        }
+        s
+    }
+
+    /// Fraction of reachable cells known free (1.0 for a room with none).
+    pub fn coverage(&self) -> f64 {
+        if self.reachable == 0 { 1.0 } else { self.reachable_known_free as f64 / self.reachable as f64 }
+    }
+
+    /// Fraction of classified cells that are right (1.0 when none are classified).
+    pub fn accuracy(&self) -> f64 {
+        if self.classified == 0 { 1.0 } else { self.correct as f64 / self.classified as f64 }
+    }
+}
+
+/// Everything a run reports; also written as `report.json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// Scenario name.
+    pub scenario: String,
+    /// Seed of the run.
+    pub seed: u64,
+    /// Simulated time at the end, seconds.
+    pub sim_time_s: f64,
+    /// Wall-clock time the run took, seconds (not part of the determinism hash).
+    pub wall_time_s: f64,
+    /// Simulated seconds per wall-clock second.
+    pub real_time_factor: f64,
+    /// Physics steps taken.
+    pub steps: u64,
+    /// Whether every mission step was carried out.
+    pub mission_complete: bool,
+    /// Sim time when the mission's last step completed, seconds.
+    pub mission_time_s: Option<f64>,
+    /// Steps of the mission that failed (e.g. "GoTo(3, 4): no path").
+    pub mission_errors: Vec<String>,
+    /// Grid size (rows, columns).
+    pub grid: (usize, usize),
+    /// Map score against the truth.
+    pub map: MapScore,
+    /// `map.coverage()`.
+    pub coverage: f64,
+    /// `map.accuracy()`.
+    pub map_accuracy: f64,
+    /// Moves Cute sent (cartography commands and trajectory commands).
+    pub moves: u64,
+    /// Collisions counted by the physics.
+    pub collisions: u32,
+    /// The robot's final pose: x, y (m), heading (deg, CCW from +x).
+    pub final_pose: (f64, f64, f64),
+    /// The grid cell the robot ends in.
+    pub final_cell: Option<(usize, usize)>,
+    /// What Cute believes is the robot's cell at the end.
+    pub cute_cell: (u8, u8),
+    /// Traffic per link.
+    pub links: Vec<LinkStats>,
+    /// Faults injected by the fault injectors (bit flips, drops).
+    pub faults_injected: u64,
+    /// Times Cute reconnected to Carto.
+    pub reconnects: u64,
+    /// SHA-256 of every byte on every link with its time: equal hashes = identical runs.
+    pub link_log_sha256: String,
+    /// The expectations, checked.
+    pub checks: Vec<Check>,
+    /// Whether every check passed.
+    pub passed: bool,
+}
+
+impl Report {
+    /// Checks `expect` against this report and fills `checks` and `passed`.
+    pub fn check(&mut self, expect: &Expectations) {
+        let mut checks = Vec::new();
+        if let Some(min) = expect.coverage_min {
+            checks.push(Check {
+                name: "coverage_min".into(),
+                expected: format!(">= {:.1}%", min * 100.0),
+                actual: format!(
+                    "{:.1}% ({}/{})",
+                    self.coverage * 100.0,
+                    self.map.reachable_known_free,
+                    self.map.reachable
+                ),
+                pass: self.coverage + 1e-9 >= min,
+            });
+        }
+        if let Some(min) = expect.map_accuracy_min {
+            checks.push(Check {
+                name: "map_accuracy_min".into(),
+                expected: format!(">= {:.1}%", min * 100.0),
+                actual: format!(
+                    "{:.1}% ({}/{})",
+                    self.map_accuracy * 100.0,
+                    self.map.correct,
+                    self.map.classified
+                ),
+                pass: self.map_accuracy + 1e-9 >= min,
+            });
+        }
+        if let Some(max) = expect.collisions_max {
+            checks.push(Check {
+                name: "collisions_max".into(),
+                expected: format!("<= {max}"),
+                actual: self.collisions.to_string(),
+                pass: self.collisions <= max,
+            });
+        }
+        if let Some(limit) = expect.finish_within_s {
+            let actual = match self.mission_time_s {
+                Some(t) => format!("{t:.1} s"),
+                None => "mission not finished".into(),
+            };
+            checks.push(Check {
+                name: "finish_within_s".into(),
+                expected: format!("<= {limit:.1} s"),
+                actual,
+                pass: self.mission_complete && self.mission_time_s.is_some_and(|t| t <= limit),
+            });
+        }
+        if let Some((row, col)) = expect.reached {
+            let actual = match self.final_cell {
+                Some((r, c)) => format!("({r}, {c})"),
+                None => "off the grid".into(),
+            };
+            checks.push(Check {
+                name: "reached".into(),
+                expected: format!("({row}, {col})"),
+                actual,
+                pass: self.final_cell == Some((row as usize, col as usize)),
+            });
+        }
+        self.passed = checks.iter().all(|c| c.pass) && self.mission_errors.is_empty();
+        self.checks = checks;
+    }
+
+    /// The human-readable report printed by `explobot run`.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "scenario        {} (seed {})", self.scenario, self.seed);
+        let _ = writeln!(
+            s,
+            "time            {:.1} s simulated in {:.2} s wall ({:.0}x real time, {} steps)",
+            self.sim_time_s, self.wall_time_s, self.real_time_factor, self.steps
+        );
+        let mission = match (self.mission_complete, self.mission_time_s) {
+            (true, Some(t)) => format!("complete at {t:.1} s"),
+            _ => "NOT complete".to_string(),
+        };
+        let _ =
+            writeln!(s, "mission         {mission}, {} moves, {} reconnects", self.moves, self.reconnects);
+        for e in &self.mission_errors {
+            let _ = writeln!(s, "  error         {e}");
+        }
+        let _ = writeln!(
+            s,
+            "map             {}x{} grid, coverage {:.1}% of {} reachable cells, accuracy {:.1}% of {} classified",
+            self.grid.0,
+            self.grid.1,
+            self.coverage * 100.0,
+            self.map.reachable,
+            self.map_accuracy * 100.0,
+            self.map.classified
+        );
+        let cell = self.final_cell.map_or("off grid".to_string(), |(r, c)| format!("cell ({r}, {c})"));
+        let _ = writeln!(
+            s,
+            "robot           x {:.3} m, y {:.3} m, heading {:.1} deg, {cell}; Cute believes ({}, {})",
+            self.final_pose.0, self.final_pose.1, self.final_pose.2, self.cute_cell.0, self.cute_cell.1
+        );
+        let _ = writeln!(s, "collisions      {}", self.collisions);
+        let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");
+        for l in &self.links {
+            let _ = writeln!(
+                s,
+                "  {:<13} {:>9}/{:>7}/{:<5}   {:>9}/{:>7}/{}",
+                l.name,
+                l.outbound.bytes,
+                l.outbound.frames,
+                l.outbound.errors,
+                l.inbound.bytes,
+                l.inbound.frames,
+                l.inbound.errors
+            );
+        }
+        let _ = writeln!(s, "faults injected {}", self.faults_injected);
+        let _ = writeln!(s, "link log        sha256 {}", self.link_log_sha256);
+        for c in &self.checks {
+            let verdict = if c.pass { "pass" } else { "FAIL" };
+            let _ = writeln!(s, "  [{verdict}] {:<17} expected {:<12} got {}", c.name, c.expected, c.actual);
+        }
+        let _ = writeln!(s, "result          {}", if self.passed { "PASS" } else { "FAIL" });
+        s
+    }
+}

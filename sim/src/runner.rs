@@ -1,0 +1,612 @@
+//! The lockstep runner: Cute ⇄ Carto ⇄ board twins ⇄ physics in one thread on a virtual clock.
+//!
+//! Every step of `dt` (5 ms by default), in this order:
+//! 1. the clock moves to `now`; the in-memory links deliver the bytes whose serial time is due
+//!    (baud-rate timing and the scenario's faults apply);
+//! 2. the **motor board** and **sensor board** twins read their UARTs and answer (telemetry,
+//!    keep-state, sensor frames built from the body's sensors);
+//! 3. **Carto** ([`carto::CartoRuntime`]) reads its three links, runs its state machines, writes;
+//! 4. the **operator** plays the mission script on **Cute**, which talks to Carto over the
+//!    in-memory "TCP" link (reconnecting by itself after a disconnect);
+//! 5. the motor board's wheel setpoints drive the **physics** one step; the sonar measures when
+//!    its cycle is due.
+//!
+//! Nothing reads a clock or an unseeded RNG, so the same scenario and seed give the same bytes on
+//! every link — see [`Lockstep::link_logs`] and the determinism test.
+
+use carto::{Carto, CartoConfig, CartoRuntime};
+use cute::{CellValue, Cute, CuteConfig, CuteError, Status};
+use protocol::link;
+use protocol::motor::ChecksumPolicy;
+use robot_model::profile::{AcceptChecksumSetting, ChecksumSetting};
+use robot_model::time::{Duration, Instant};
+use transport::{
+    ByteFaults, Connector, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock,
+    TraceHandle, Tracer, mem_listener,
+};
+
+use crate::body::RobotBody;
+use crate::grid::{GridFrame, TruthGrid};
+use crate::record::{Chunk, Dir, EndpointLog, hash_logs};
+use crate::report::{DirectionStats, LinkStats, MapScore, Report};
+use crate::scenario::{Fault, Heading, LinkFaults, LoadedScenario, Step};
+use crate::twin::{Twin, WriteBudget, read_all};
+
+/// Cute's end of the Cute ⇄ Carto link.
+type CuteEnd = Tracer<FaultInjector<MemLink>>;
+/// Carto's end of a board link.
+type CartoEnd = Tracer<FaultInjector<MemLink>>;
+
+/// Traces are moved into the link logs every this many steps (records carry their own times,
+/// so the logs do not depend on it).
+const TRACE_EVERY: u64 = 200;
+/// Time the run goes on after the mission's last step, so final moves settle.
+const SETTLE: Duration = Duration::from_millis(500);
+/// A run that could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum SetupError {
+    /// Cute refused its configuration (e.g. a grid larger than 256 × 256).
+    #[error("cute: {0}")]
+    Cute(#[from] CuteError),
+}
+
+/// The mission script, played one step at a time on Cute.
+#[derive(Debug)]
+struct Operator {
+    steps: Vec<Step>,
+    next: usize,
+    wait_until: Option<Instant>,
+    errors: Vec<String>,
+    finished_at: Option<Instant>,
+}
+
+impl Operator {
+    fn new(steps: Vec<Step>) -> Self {
+        Operator { steps, next: 0, wait_until: None, errors: Vec::new(), finished_at: None }
+    }
+
+    /// Plays every step that can complete now.
+    fn poll(&mut self, now: Instant, cute: &mut Cute) {
+        while let Some(step) = self.steps.get(self.next).cloned() {
+            let done = match step {
+                Step::StartCartography => {
+                    if let Err(e) = cute.start_cartography() {
+                        self.errors.push(format!("StartCartography at {now}: {e}"));
+                    }
+                    true
+                }
+                Step::WaitUntilMapped => cute.status() != Status::Mapping,
+                Step::GoTo(row, col) => {
+                    if let Err(e) = cute.go_to(row, col) {
+                        self.errors.push(format!("GoTo({row}, {col}) at {now}: {e}"));
+                    }
+                    true
+                }
+                Step::WaitUntilIdle => matches!(cute.status(), Status::Idle | Status::Done),
+                Step::Stop => {
+                    cute.stop();
+                    true
+                }
+                Step::ResetMap => {
+                    cute.reset_map();
+                    true
+                }
+                Step::Wait(seconds) => {
+                    let until =
+                        *self.wait_until.get_or_insert(now + Duration::from_secs_f64(f64::from(seconds)));
+                    now >= until
+                }
+            };
+            if !done {
+                return;
+            }
+            self.wait_until = None;
+            self.next += 1;
+        }
+        self.finished_at.get_or_insert(now);
+    }
+}
+
+/// Cute and its connection to Carto (Cute decides when to reconnect, with back-off).
+struct CuteSide {
+    cute: Cute,
+    connector: MemConnector,
+    link: Option<CuteEnd>,
+    faults: FaultConfig,
+    fault_seed: u64,
+    clock: MockClock,
+    traces: Vec<TraceHandle>,
+    connects: u64,
+    fault_counts: u64,
+}
+
+impl CuteSide {
+    fn poll(&mut self, now: Instant, operator: &mut Operator) {
+        if self.link.is_none() && self.cute.next_connect_at(now).is_some_and(|at| now >= at) {
+            match self.connector.connect() {
+                Ok(raw) => {
+                    let seed = self.fault_seed.wrapping_add(self.connects);
+                    let link = FaultInjector::new(raw, seed, self.clock.clone()).with_config(self.faults);
+                    let link = Tracer::new(link, self.clock.clone());
+                    self.traces.push(link.handle());
+                    self.link = Some(link);
+                    self.connects += 1;
+                    self.cute.on_connected(now);
+                }
+                Err(_) => self.cute.on_connect_failed(now),
+            }
+        }
+        let mut incoming = Vec::new();
+        let alive = self.link.as_mut().is_none_or(|l| read_all(l, &mut incoming));
+        if !incoming.is_empty() {
+            self.cute.on_bytes(now, &incoming);
+        }
+        if !alive || self.cute.close_requested() {
+            self.drop_link(now);
+        }
+        operator.poll(now, &mut self.cute);
+        self.cute.poll(now);
+        let out = self.cute.take_outgoing();
+        if let Some(link) = self.link.as_mut()
+            && !out.is_empty()
+        {
+            // The in-memory TCP link takes everything (its queue is far larger than a frame
+            // batch); a failure means the peer is gone.
+            if link.write(&out).is_err() {
+                self.drop_link(now);
+            }
+        }
+    }
+
+    fn drop_link(&mut self, now: Instant) {
+        if let Some(mut link) = self.link.take() {
+            self.fault_counts += fault_total(link.inner());
+            if let Some(inner) = link.inner_mut().inner_mut() {
+                inner.close();
+            }
+            self.cute.on_disconnected(now);
+        }
+    }
+}
+
+fn fault_total<L: Link>(f: &FaultInjector<L>) -> u64 {
+    let c = f.counters();
+    c.rx.dropped + c.rx.flipped + c.rx.duplicated + c.tx.dropped + c.tx.flipped + c.tx.duplicated
+}
+
+fn fault_config(f: &LinkFaults) -> FaultConfig {
+    let bytes = ByteFaults { drop_rate: f.drop_rate, flip_rate: f.corrupt_rate, duplicate_rate: 0.0 };
+    FaultConfig {
+        rx: bytes,
+        tx: bytes,
+        rx_delay_micros: (f64::from(f.latency_ms) * 1000.0).round() as u64,
+        disconnect_at_micros: None,
+    }
+}
+
+/// A whole scenario run in lockstep.
+pub struct Lockstep {
+    loaded: LoadedScenario,
+    seed: u64,
+    clock: MockClock,
+    now: Instant,
+    dt: Duration,
+    steps: u64,
+    end: Instant,
+    twin: Twin,
+    motor_board_end: Tracer<MemLink>,
+    sensor_board_end: Tracer<MemLink>,
+    carto: CartoRuntime<MemListener, CartoEnd, CartoEnd>,
+    cute: CuteSide,
+    operator: Operator,
+    faults: Vec<Fault>,
+    truth: TruthGrid,
+    traces: Vec<(String, String, TraceHandle)>,
+    logs: Vec<EndpointLog>,
+    settled_at: Option<Instant>,
+}
+
+impl Lockstep {
+    /// Builds the run: room, robot, board twins, Carto, Cute, links. `seed` overrides the
+    /// scenario's seed when given.
+    pub fn new(loaded: LoadedScenario, seed: Option<u64>) -> Result<Lockstep, SetupError> {
+        let scenario = &loaded.scenario;
+        let profile = &loaded.profile;
+        let seed = seed.unwrap_or(scenario.seed);
+        let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
+        let truth = TruthGrid::build(scenario, profile);
+        let start = scenario.start;
+        let twin = Twin::new(&loaded, seed, dt);
+        let clock = MockClock::new();
+
+        let mut traces = Vec::new();
+        let mut board_link = |name: &str, baud: u32, faults: &LinkFaults, salt: u64| {
+            let (carto_raw, board_raw) = MemLink::pair(Some(baud), clock.clone());
+            let carto_end =
+                FaultInjector::new(carto_raw, seed ^ salt, clock.clone()).with_config(fault_config(faults));
+            let carto_end = Tracer::new(carto_end, clock.clone());
+            let board_end = Tracer::new(board_raw, clock.clone());
+            traces.push((name.to_string(), "carto".to_string(), carto_end.handle()));
+            traces.push((name.to_string(), "board".to_string(), board_end.handle()));
+            (carto_end, board_end)
+        };
+        let (motor_carto, motor_board_end) =
+            board_link("motor", profile.serial.motor_baud, &scenario.links.motor, 0x006d_6f74_6f72);
+        let (sensor_carto, sensor_board_end) =
+            board_link("sensor", profile.serial.sensor_baud, &scenario.links.sensor, 0x0000_7365_6e73_6f72);
+        let (listener, connector) = mem_listener(None, clock.clone());
+        let carto = CartoRuntime::new(
+            Carto::new(CartoConfig::from_profile(profile)),
+            listener,
+            motor_carto,
+            sensor_carto,
+        );
+        let cute = Cute::new(CuteConfig {
+            rows: truth.rows,
+            cols: truth.cols,
+            start: (start.row, start.col),
+            heading: match start.heading {
+                Heading::South => cute::Heading::South,
+                Heading::North => cute::Heading::North,
+                Heading::West => cute::Heading::West,
+                Heading::East => cute::Heading::East,
+            },
+            ..CuteConfig::default()
+        })?;
+        let max = Instant::from_secs_f64(f64::from(scenario.physics.max_sim_s));
+        let faults = scenario.faults.clone();
+        let operator = Operator::new(scenario.mission.clone());
+        Ok(Lockstep {
+            seed,
+            dt,
+            steps: 0,
+            now: Instant::ZERO,
+            end: max,
+            twin,
+            motor_board_end,
+            sensor_board_end,
+            carto,
+            cute: CuteSide {
+                cute,
+                connector,
+                link: None,
+                faults: fault_config(&scenario.links.gui),
+                fault_seed: seed ^ 0x0067_7569,
+                clock: clock.clone(),
+                traces: Vec::new(),
+                connects: 0,
+                fault_counts: 0,
+            },
+            operator,
+            faults,
+            truth,
+            clock,
+            traces,
+            logs: Vec::new(),
+            settled_at: None,
+            loaded,
+        })
+    }
+
+    /// Advances the whole system by one step. Returns `false` once the run is over.
+    pub fn step(&mut self) -> bool {
+        if self.is_finished() {
+            return false;
+        }
+        self.now += self.dt;
+        let now = self.now;
+        self.clock.set_micros(now.total_micros());
+        self.steps += 1;
+
+        for fault in &self.faults {
+            match fault {
+                Fault::GuiDisconnect { at_s } => {
+                    let at = Instant::from_secs_f64(f64::from(*at_s));
+                    if at <= now && at > now - self.dt {
+                        self.cute.drop_link(now);
+                    }
+                }
+            }
+        }
+
+        // 2. Board twins.
+        self.twin.board_io(
+            now,
+            &mut self.motor_board_end,
+            &mut self.sensor_board_end,
+            WriteBudget::UNLIMITED,
+        );
+
+        // 3. Carto.
+        self.carto.step(now);
+
+        // 4. Cute and the operator.
+        self.cute.poll(now, &mut self.operator);
+        if self.operator.finished_at.is_some() && self.settled_at.is_none() {
+            self.settled_at = Some(now + SETTLE);
+        }
+
+        // 5. Physics.
+        self.twin.physics_step(now);
+        if self.steps.is_multiple_of(TRACE_EVERY) || self.is_finished() {
+            self.collect_traces();
+        }
+        !self.is_finished()
+    }
+
+    /// Runs until the mission is over (plus a short settle) or the time limit.
+    pub fn run_to_end(&mut self, mut progress: impl FnMut(&Lockstep)) {
+        while self.step() {
+            if self.steps.is_multiple_of(2000) {
+                progress(self);
+            }
+        }
+        progress(self);
+    }
+
+    /// Whether the run is over.
+    pub fn is_finished(&self) -> bool {
+        self.now >= self.end || self.settled_at.is_some_and(|t| self.now >= t)
+    }
+
+    /// Moves every recorded byte into the link logs now (the runner does it every
+    /// [`TRACE_EVERY`] steps and at the end of the run).
+    pub fn flush_traces(&mut self) {
+        self.collect_traces();
+    }
+
+    fn collect_traces(&mut self) {
+        let cute_traces = self.cute.traces.iter().map(|h| ("gui".to_string(), "cute".to_string(), h.clone()));
+        let all: Vec<_> = self.traces.iter().cloned().chain(cute_traces).collect();
+        for (link, endpoint, handle) in all {
+            let records = handle.take();
+            if records.is_empty() {
+                continue;
+            }
+            let log = match self.logs.iter_mut().position(|l| l.link == link && l.endpoint == endpoint) {
+                Some(i) => &mut self.logs[i],
+                None => {
+                    self.logs.push(EndpointLog {
+                        link: link.clone(),
+                        endpoint: endpoint.clone(),
+                        chunks: Vec::new(),
+                    });
+                    let last = self.logs.len() - 1;
+                    &mut self.logs[last]
+                }
+            };
+            log.chunks.extend(records.into_iter().map(|r| Chunk {
+                micros: r.micros,
+                dir: match r.direction {
+                    transport::Direction::Read => Dir::Read,
+                    transport::Direction::Written => Dir::Write,
+                },
+                bytes: r.bytes,
+            }));
+        }
+    }
+
+    /// Every byte moved on every link, per endpoint: complete once the run is finished, else as of
+    /// the last [`Lockstep::flush_traces`].
+    pub fn link_logs(&self) -> &[EndpointLog] {
+        &self.logs
+    }
+
+    /// The fixed physics step.
+    pub fn dt(&self) -> Duration {
+        self.dt
+    }
+
+    /// Simulated time now.
+    pub fn now(&self) -> Instant {
+        self.now
+    }
+
+    /// The time limit of the run.
+    pub fn time_limit(&self) -> Instant {
+        self.end
+    }
+
+    /// The robot's physical side.
+    pub fn body(&self) -> &RobotBody {
+        self.twin.body()
+    }
+
+    /// The board twins and the body.
+    pub fn twin(&self) -> &Twin {
+        &self.twin
+    }
+
+    /// Cute, as the operator sees it.
+    pub fn cute(&self) -> &Cute {
+        &self.cute.cute
+    }
+
+    /// Cute, for user actions from a window.
+    pub fn cute_mut(&mut self) -> &mut Cute {
+        &mut self.cute.cute
+    }
+
+    /// Carto's state.
+    pub fn carto(&self) -> &Carto {
+        self.carto.carto()
+    }
+
+    /// The grid's placement in the world.
+    pub fn frame(&self) -> GridFrame {
+        self.truth.frame
+    }
+
+    /// The ground truth.
+    pub fn truth(&self) -> &TruthGrid {
+        &self.truth
+    }
+
+    /// The robot's trail (world metres).
+    pub fn trail(&self) -> &[(f32, f32)] {
+        self.twin.trail()
+    }
+
+    /// The scenario being run.
+    pub fn loaded(&self) -> &LoadedScenario {
+        &self.loaded
+    }
+
+    /// Seed in use.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// What Cute's map says of each cell, row-major: `Some(true)` free, `Some(false)` obstacle.
+    pub fn known_cells(&self) -> Vec<Option<bool>> {
+        let map = self.cute.cute.map();
+        let mut out = Vec::with_capacity(self.truth.rows * self.truth.cols);
+        for row in 0..self.truth.rows {
+            for col in 0..self.truth.cols {
+                out.push(match map.get(row, col) {
+                    None | Some(CellValue::Unknown) => None,
+                    Some(CellValue::Obstacle) => Some(false),
+                    Some(_) => Some(true),
+                });
+            }
+        }
+        out
+    }
+
+    /// The report of the run so far; `wall_time_s` is the caller's measurement.
+    pub fn report(&self, wall_time_s: f64) -> Report {
+        let scenario = &self.loaded.scenario;
+        let start = (scenario.start.row as usize, scenario.start.col as usize);
+        let map = MapScore::score(&self.truth, start, &self.known_cells());
+        let pose = self.twin.body().pose();
+        let sim_time_s = self.now.as_secs_f64();
+        let cute = &self.cute.cute;
+        let (cx, cy, _) = cute.robot();
+        let mut links = vec![
+            self.link_stats("motor", "carto", "board", Proto::Motor),
+            self.link_stats("sensor", "carto", "board", Proto::Sensor),
+        ];
+        links.push(self.gui_stats());
+        let faults_injected = self.cute.fault_counts
+            + self.cute.link.as_ref().map_or(0, |l| fault_total(l.inner()))
+            + self.carto.motor_link().map_or(0, |l| fault_total(l.inner()))
+            + self.carto.sensor_link().map_or(0, |l| fault_total(l.inner()));
+        let mut report = Report {
+            scenario: scenario.name.clone(),
+            seed: self.seed,
+            sim_time_s,
+            wall_time_s,
+            real_time_factor: sim_time_s / wall_time_s.max(1e-9),
+            steps: self.steps,
+            mission_complete: self.operator.finished_at.is_some(),
+            mission_time_s: self.operator.finished_at.map(|t| t.as_secs_f64()),
+            mission_errors: self.operator.errors.clone(),
+            grid: (self.truth.rows, self.truth.cols),
+            coverage: map.coverage(),
+            map_accuracy: map.accuracy(),
+            map,
+            moves: cute.counters().moves_sent,
+            collisions: self.twin.body().world().collisions(),
+            final_pose: (f64::from(pose.x), f64::from(pose.y), f64::from(pose.theta.to_degrees())),
+            final_cell: self.truth.frame.cell_at(pose.x, pose.y),
+            cute_cell: (cx, cy),
+            links,
+            faults_injected,
+            reconnects: self.cute.connects.saturating_sub(1),
+            link_log_sha256: hash_logs(&self.logs),
+            checks: Vec::new(),
+            passed: false,
+        };
+        report.check(&scenario.expect);
+        report
+    }
+
+    fn stream(&self, link: &str, endpoint: &str, dir: Dir) -> Vec<u8> {
+        let mut out = Vec::new();
+        for log in self.logs.iter().filter(|l| l.link == link && l.endpoint == endpoint) {
+            for chunk in log.chunks.iter().filter(|c| c.dir == dir) {
+                out.extend_from_slice(&chunk.bytes);
+            }
+        }
+        out
+    }
+
+    fn link_stats(&self, name: &str, carto: &str, board: &str, proto: Proto) -> LinkStats {
+        let sent_out = self.stream(name, carto, Dir::Write);
+        let got_out = self.stream(name, board, Dir::Read);
+        let sent_in = self.stream(name, board, Dir::Write);
+        let got_in = self.stream(name, carto, Dir::Read);
+        // Each direction is judged by the checksum its sender uses, so errors are corruption.
+        let board = &self.loaded.profile.motor_board;
+        let out_policy = match board.accept_checksum {
+            AcceptChecksumSetting::Sum => ChecksumPolicy::Sum,
+            AcceptChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
+            AcceptChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
+            AcceptChecksumSetting::Ignore => ChecksumPolicy::Ignore,
+        };
+        let in_policy = match board.checksum {
+            ChecksumSetting::Sum => ChecksumPolicy::Sum,
+            ChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
+            ChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
+        };
+        LinkStats {
+            name: name.to_string(),
+            outbound: direction_stats(sent_out.len(), &got_out, proto, out_policy),
+            inbound: direction_stats(sent_in.len(), &got_in, proto, in_policy),
+        }
+    }
+
+    fn gui_stats(&self) -> LinkStats {
+        let out = self.stream("gui", "cute", Dir::Write);
+        let inb = self.stream("gui", "cute", Dir::Read);
+        let policy = ChecksumPolicy::default();
+        LinkStats {
+            name: "gui".to_string(),
+            outbound: direction_stats(out.len(), &out, Proto::Link, policy),
+            inbound: direction_stats(inb.len(), &inb, Proto::Link, policy),
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Proto {
+    Link,
+    Motor,
+    Sensor,
+}
+
+/// Counts the frames and errors a receiver finds in `received`.
+fn direction_stats(sent: usize, received: &[u8], proto: Proto, policy: ChecksumPolicy) -> DirectionStats {
+    let (frames, errors) = match proto {
+        Proto::Link => {
+            let mut d = link::Decoder::default();
+            let mut errors = 0;
+            let mut rest = received;
+            // A fatal framing error closes a connection; the next bytes belong to a new one.
+            while !rest.is_empty() {
+                let take = rest.len().min(4096);
+                for item in d.feed(&rest[..take]) {
+                    if item.is_err() {
+                        errors += 1;
+                    }
+                }
+                if d.is_failed() {
+                    d.reset();
+                }
+                rest = &rest[take..];
+            }
+            (d.stats().frames, errors)
+        }
+        Proto::Motor => {
+            let mut d = protocol::motor::Decoder::new(policy);
+            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
+            (d.stats().frames, errors)
+        }
+        Proto::Sensor => {
+            let mut d = protocol::sensor::Decoder::new();
+            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
+            (d.stats().frames, errors)
+        }
+    };
+    DirectionStats { bytes: sent as u64, frames, errors }
+}

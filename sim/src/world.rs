@@ -1,0 +1,268 @@
+//! [`SimWorld`]: the rapier2d world of a scenario — walls, obstacles and the robot's body.
+//!
+//! One struct owns every rapier set and steps them with fixed [`IntegrationParameters`], `()` for
+//! hooks and events. Bevy is not needed to use it. The world is top-down: no gravity; the floor's
+//! grip is modelled per wheel by [`crate::drive`], which pushes on the body each step.
+//!
+//! Collisions are counted as *contact starts*: each time the robot begins touching a wall or an
+//! obstacle it was not touching in the previous step, the count goes up by one.
+
+use std::collections::BTreeSet;
+
+use rapier2d::prelude::*;
+use robot_model::pose::Pose2;
+use robot_model::profile::RobotProfile;
+
+use crate::grid::{obstacle_shape, room_edges};
+use crate::scenario::Scenario;
+
+/// Separation below which the robot counts as touching something, metres. Rapier reports
+/// contact pairs from 2 cm apart (its prediction distance) and its manifold distances date from
+/// before the solver moved the bodies, so touching is decided from the true shape distance.
+const TOUCH: f32 = 0.001;
+
+/// A ray that hit something.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RayHit {
+    /// Distance from the ray's origin, metres.
+    pub distance: f32,
+    /// Angle between the ray and the surface normal, radians (0 = head-on).
+    pub incidence: f32,
+}
+
+/// The physics world of one scenario.
+pub struct SimWorld {
+    bodies: RigidBodySet,
+    colliders: ColliderSet,
+    islands: IslandManager,
+    broad_phase: BroadPhaseBvh,
+    narrow_phase: NarrowPhase,
+    impulse_joints: ImpulseJointSet,
+    multibody_joints: MultibodyJointSet,
+    soft_bodies: SoftBodySet,
+    ccd: CCDSolver,
+    pipeline: PhysicsPipeline,
+    params: IntegrationParameters,
+    robot: RigidBodyHandle,
+    robot_collider: ColliderHandle,
+    half_length: f32,
+    touching: BTreeSet<(u32, u32)>,
+    collisions: u32,
+    front_contact: bool,
+}
+
+impl SimWorld {
+    /// Builds the room, its obstacles and the robot at `start` (world pose).
+    pub fn new(scenario: &Scenario, profile: &RobotProfile, start: Pose2, dt: f32) -> SimWorld {
+        let mut bodies = RigidBodySet::new();
+        let mut colliders = ColliderSet::new();
+        let ground = bodies.insert(RigidBodyBuilder::fixed());
+        for wall in room_edges(&scenario.room) {
+            colliders.insert_with_parent(
+                ColliderBuilder::segment(wall.a, wall.b).friction(0.3),
+                ground,
+                &mut bodies,
+            );
+        }
+        for obstacle in &scenario.obstacles {
+            if let Some((pose, shape)) = obstacle_shape(obstacle) {
+                let collider = ColliderBuilder::new(SharedShape(std::sync::Arc::from(shape)))
+                    .position(pose)
+                    .friction(0.3);
+                colliders.insert_with_parent(collider, ground, &mut bodies);
+            }
+        }
+        let half_length = profile.geometry.body_length_m * 0.5;
+        let robot = bodies.insert(
+            RigidBodyBuilder::dynamic()
+                .translation(Vector::new(start.x, start.y))
+                .rotation(start.theta)
+                .ccd_enabled(true)
+                .can_sleep(false),
+        );
+        let robot_collider = colliders.insert_with_parent(
+            ColliderBuilder::cuboid(half_length, profile.geometry.body_width_m * 0.5)
+                .mass(profile.geometry.mass_kg)
+                .friction(0.3)
+                .restitution(0.0),
+            robot,
+            &mut bodies,
+        );
+        let params = IntegrationParameters { dt, ..IntegrationParameters::default() };
+        let mut world = SimWorld {
+            bodies,
+            colliders,
+            islands: IslandManager::new(),
+            broad_phase: BroadPhaseBvh::new(),
+            narrow_phase: NarrowPhase::new(),
+            impulse_joints: ImpulseJointSet::new(),
+            multibody_joints: MultibodyJointSet::new(),
+            soft_bodies: SoftBodySet::new(),
+            ccd: CCDSolver::new(),
+            pipeline: PhysicsPipeline::new(),
+            params,
+            robot,
+            robot_collider,
+            half_length,
+            touching: BTreeSet::new(),
+            collisions: 0,
+            front_contact: false,
+        };
+        // The broad phase (and so every ray cast) only knows the colliders after a step: take a
+        // zero-length one so the sonar works from time zero.
+        world.params.dt = 0.0;
+        world.step();
+        world.params.dt = dt;
+        world
+    }
+
+    /// Advances the world by one fixed step (the `dt` given to [`SimWorld::new`]).
+    pub fn step(&mut self) {
+        self.pipeline.step(
+            Vector::ZERO,
+            &self.params,
+            &mut self.islands,
+            &mut self.broad_phase,
+            &mut self.narrow_phase,
+            &mut self.bodies,
+            &mut self.colliders,
+            &mut self.impulse_joints,
+            &mut self.multibody_joints,
+            &mut self.soft_bodies,
+            &mut self.ccd,
+            &(),
+            &(),
+        );
+        self.update_contacts();
+    }
+
+    fn update_contacts(&mut self) {
+        let mut now_touching = BTreeSet::new();
+        let mut front = false;
+        let Some(robot) = self.colliders.get(self.robot_collider) else {
+            return;
+        };
+        for pair in self.narrow_phase.contact_pairs_with(self.robot_collider) {
+            if !pair.has_any_active_contact() {
+                continue;
+            }
+            let other = if pair.collider1 == self.robot_collider { pair.collider2 } else { pair.collider1 };
+            let Some(obstacle) = self.colliders.get(other) else {
+                continue;
+            };
+            let gap = rapier2d::parry::query::distance(
+                robot.position(),
+                robot.shape(),
+                obstacle.position(),
+                obstacle.shape(),
+            )
+            .map_or(0.0, |d| d.distance);
+            if gap > TOUCH {
+                continue;
+            }
+            now_touching.insert(other.into_raw_parts());
+            let robot_is_first = pair.collider1 == self.robot_collider;
+            front |= front_face_touched(pair.manifolds(), robot_is_first, self.half_length);
+        }
+        self.collisions += now_touching.difference(&self.touching).count() as u32;
+        self.touching = now_touching;
+        self.front_contact = front;
+    }
+
+    fn robot_body(&self) -> Option<&RigidBody> {
+        self.bodies.get(self.robot)
+    }
+
+    /// The robot's pose in the world.
+    pub fn robot_pose(&self) -> Pose2 {
+        match self.robot_body() {
+            Some(b) => {
+                let t = b.translation();
+                Pose2 { x: t.x, y: t.y, theta: b.rotation().angle() }
+            }
+            None => Pose2::default(),
+        }
+    }
+
+    /// The robot's velocity: world linear (m/s) and angular (rad/s, counter-clockwise).
+    pub fn robot_velocity(&self) -> (f32, f32, f32) {
+        match self.robot_body() {
+            Some(b) => (b.linvel().x, b.linvel().y, b.angvel()),
+            None => (0.0, 0.0, 0.0),
+        }
+    }
+
+    /// Velocity (world frame) of the robot's material point at body-frame offset (bx, by).
+    pub fn robot_point_velocity(&self, bx: f32, by: f32) -> (f32, f32) {
+        match self.robot_body() {
+            Some(b) => {
+                let p = b.position().transform_point(Vector::new(bx, by));
+                let v = b.velocity_at_point(p);
+                (v.x, v.y)
+            }
+            None => (0.0, 0.0),
+        }
+    }
+
+    /// Clears the forces of the previous step.
+    pub fn reset_robot_forces(&mut self) {
+        if let Some(b) = self.bodies.get_mut(self.robot) {
+            b.reset_forces(true);
+        }
+    }
+
+    /// Pushes on the robot with a world-frame force (N) at body-frame offset (bx, by).
+    pub fn add_robot_force(&mut self, bx: f32, by: f32, fx: f32, fy: f32) {
+        if let Some(b) = self.bodies.get_mut(self.robot) {
+            let p = b.position().transform_point(Vector::new(bx, by));
+            b.add_force_at_point(Vector::new(fx, fy), p, true);
+        }
+    }
+
+    /// Casts a ray from world point `origin` along unit `dir`; the robot itself is transparent.
+    /// A miss within `max` metres is `None`.
+    pub fn cast_range(&self, origin: (f32, f32), dir: (f32, f32), max: f32) -> Option<RayHit> {
+        let filter = QueryFilter::new().exclude_rigid_body(self.robot);
+        let query = self.broad_phase.as_query_pipeline(
+            self.narrow_phase.query_dispatcher(),
+            &self.bodies,
+            &self.colliders,
+            filter,
+        );
+        let ray = Ray::new(Vector::new(origin.0, origin.1), Vector::new(dir.0, dir.1));
+        let (_, hit) = query.cast_ray_and_get_normal(&ray, max, true)?;
+        // Angle between the reversed ray and the surface normal.
+        let cos = -(dir.0 * hit.normal.x + dir.1 * hit.normal.y);
+        Some(RayHit { distance: hit.time_of_impact, incidence: cos.abs().clamp(0.0, 1.0).acos() })
+    }
+
+    /// How many times the robot has started touching something.
+    pub fn collisions(&self) -> u32 {
+        self.collisions
+    }
+
+    /// Whether anything touches the robot's front face now (the bumper).
+    pub fn front_contact(&self) -> bool {
+        self.front_contact
+    }
+
+    /// The fixed step, seconds.
+    pub fn dt(&self) -> f32 {
+        self.params.dt
+    }
+}
+
+/// Whether something touching the robot (the caller checked) presses on its front face: a
+/// contact point on the front face (corners included) whose normal, leaving the robot, points
+/// within 45° of straight ahead. A wall grazing the robot's side while it turns does not press
+/// the bumper.
+fn front_face_touched(manifolds: &[ContactManifold], robot_is_first: bool, half_length: f32) -> bool {
+    manifolds.iter().any(|m| {
+        let normal = if robot_is_first { m.local_n1 } else { m.local_n2 };
+        normal.x > std::f32::consts::FRAC_1_SQRT_2
+            && m.points.iter().any(|p| {
+                let local = if robot_is_first { p.local_p1 } else { p.local_p2 };
+                local.x > half_length - 0.01
+            })
+    })
+}

@@ -1,0 +1,169 @@
+//! Physics of the twin against what the robot's parameters predict.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use robot_model::kinematics::{MecanumKinematics, rad_s_to_rpm};
+use robot_model::pose::{Pose2, Twist};
+use robot_model::profile::RobotProfile;
+use robot_model::time::{Duration, Instant};
+use sha2::{Digest, Sha256};
+use sim::body::RobotBody;
+use sim::scenario::Scenario;
+
+const DT: Duration = Duration::from_millis(5);
+
+/// A big empty room (10 m × 10 m) with optional extra obstacles.
+fn room(obstacles: &str) -> Scenario {
+    let text = format!(
+        "Scenario(name: \"physics\", room: [(-5.0, -5.0), (5.0, -5.0), (5.0, 5.0), (-5.0, 5.0)], \
+         start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
+    );
+    Scenario::from_ron_str(&text, "physics.ron").unwrap()
+}
+
+fn quiet_profile() -> RobotProfile {
+    let mut p = RobotProfile::default();
+    p.sonar.noise_sigma_cm = 0.0;
+    p.imu.noise_sigma_deg = 0.0;
+    p.imu.drift_deg_per_min = 0.0;
+    p
+}
+
+/// Wheel setpoints (rpm) for a body twist, through the profile's kinematics.
+fn setpoints(profile: &RobotProfile, twist: Twist) -> [f32; 4] {
+    MecanumKinematics::from_profile(profile).inverse(twist).map(rad_s_to_rpm)
+}
+
+fn drive(body: &mut RobotBody, sp: [f32; 4], seconds: f32) {
+    let steps = (seconds / DT.as_secs_f32()).round() as usize;
+    for _ in 0..steps {
+        body.step(sp);
+    }
+}
+
+#[test]
+fn forward_full_speed_for_two_seconds_matches_wheel_speed_time_and_motor_lag() {
+    let p = quiet_profile();
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(-3.0, 0.0, 0.0), DT);
+    let sp = [p.motor.max_wheel_rpm; 4];
+    drive(&mut body, sp, 2.0);
+    let v = (p.motor.max_wheel_rpm / 60.0) * std::f32::consts::TAU * p.geometry.wheel_radius_m;
+    let tau = p.motor.tau_ms / 1000.0;
+    let predicted = v * (2.0 - tau * (1.0 - (-2.0 / tau).exp()));
+    let moved = body.pose().x + 3.0;
+    assert!((moved - predicted).abs() / predicted < 0.05, "moved {moved:.3} m, predicted {predicted:.3} m");
+    assert!(body.pose().y.abs() < 0.01 && body.pose().theta.abs() < 0.01, "{:?}", body.pose());
+}
+
+#[test]
+fn spinning_turns_at_the_rate_the_kinematics_predict() {
+    let p = quiet_profile();
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let omega = 1.0; // rad/s counter-clockwise
+    let sp = setpoints(&p, Twist { vx: 0.0, vy: 0.0, omega });
+    drive(&mut body, sp, 0.5); // settle the motors
+    let before = body.pose().theta;
+    drive(&mut body, sp, std::f32::consts::FRAC_PI_2 / omega);
+    let turned = (body.pose().theta - before).to_degrees();
+    assert!((turned - 90.0).abs() < 4.5, "turned {turned:.2} deg");
+    let pos = body.pose();
+    assert!(pos.x.abs() < 0.01 && pos.y.abs() < 0.01, "spun in place: {pos:?}");
+}
+
+#[test]
+fn strafing_moves_sideways() {
+    let p = quiet_profile();
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let sp = setpoints(&p, Twist { vx: 0.0, vy: 0.3, omega: 0.0 });
+    drive(&mut body, sp, 2.0);
+    let pos = body.pose();
+    assert!(pos.y > 0.5, "moved left: {pos:?}");
+    assert!(pos.x.abs() < 0.02 && pos.theta.abs() < 0.02, "no forward motion or turn: {pos:?}");
+}
+
+#[test]
+fn driving_into_a_wall_does_not_tunnel_and_counts_one_collision_and_presses_the_bumper() {
+    let p = quiet_profile();
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(3.0, 0.0, 0.0), DT);
+    let sp = [p.motor.max_wheel_rpm; 4];
+    let mut bumped = false;
+    for _ in 0..800 {
+        body.step(sp);
+        bumped |= body.bumper();
+    }
+    let front = body.pose().x + p.geometry.body_length_m / 2.0;
+    assert!(front <= 5.0 + 0.01, "front at {front:.3}: went through the wall");
+    assert!(front > 4.95, "front at {front:.3}: stopped short of the wall");
+    assert_eq!(body.world().collisions(), 1);
+    assert!(bumped && body.bumper());
+    // Against the wall the wheels keep turning (slipping): the encoders count on at full wheel
+    // speed while the body stays put.
+    let (before, x_before) = (body.encoder_counts()[0], body.pose().x);
+    drive(&mut body, sp, 1.0);
+    let turns = (body.encoder_counts()[0] - before) as f32 / p.pulses_per_wheel_rev();
+    let expected = p.motor.max_wheel_rpm / 60.0;
+    assert!((turns - expected).abs() < 0.05 * expected, "{turns} wheel turns in 1 s, expected {expected}");
+    assert!((body.pose().x - x_before).abs() < 0.002);
+}
+
+#[test]
+fn a_wall_one_metre_ahead_reads_100_cm() {
+    let p = quiet_profile();
+    // The sensor sits at the robot's front; put a wall exactly 1.00 m ahead of it.
+    let mount = p.sonar.mount_x_m;
+    let wall_x = 1.0;
+    let s = room(&format!("Segment(from: ({wall_x}, -2.0), to: ({wall_x}, 2.0))"));
+    let mut body = RobotBody::new(&s, &p, Pose2::new(wall_x - 1.0 - mount, 0.0, 0.0), DT);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    assert!(body.sample_sonar(Instant::ZERO, &mut rng));
+    let cm = body.sonar_cm().expect("an echo");
+    assert!((cm - 100.0).abs() <= 1.0, "read {cm} cm");
+    // Not due again until the 60 ms cycle is over.
+    assert!(!body.sample_sonar(Instant::from_millis(30), &mut rng));
+    assert!(body.sample_sonar(Instant::from_millis(60), &mut rng));
+}
+
+#[test]
+fn a_wall_at_40_degrees_incidence_gives_no_echo() {
+    let p = quiet_profile();
+    // A wall through (1, 0) whose normal is 40° off the robot's axis.
+    let a = 40f32.to_radians();
+    let (dx, dy) = (-a.sin() * 2.0, a.cos() * 2.0);
+    let s = room(&format!("Segment(from: ({}, {}), to: ({}, {}))", 1.0 - dx, -dy, 1.0 + dx, dy));
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    body.sample_sonar(Instant::ZERO, &mut rng);
+    assert_eq!(body.sonar_cm(), None);
+    assert!(body.last_rays().iter().all(|r| !r.echo));
+    // Head-on, the same wall echoes.
+    let s = room("Segment(from: (1.0, -2.0), to: (1.0, 2.0))");
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    body.sample_sonar(Instant::ZERO, &mut rng);
+    assert!(body.sonar_cm().is_some());
+}
+
+fn trajectory_hash() -> String {
+    let p = RobotProfile::default();
+    let s = room("Box(center: (1.0, 0.4), size: (0.3, 0.3)), Circle(center: (-1.0, 1.0), radius: 0.1)");
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.3), DT);
+    let mut rng = ChaCha8Rng::seed_from_u64(99);
+    let mut h = Sha256::new();
+    let twists = [Twist { vx: 0.4, vy: 0.1, omega: 0.5 }, Twist { vx: -0.2, vy: 0.3, omega: -1.0 }];
+    for i in 0..2000u64 {
+        let sp = setpoints(&p, twists[(i / 400 % 2) as usize]);
+        body.step(sp);
+        body.sample_sonar(Instant::from_micros(i * 5000), &mut rng);
+        let pose = body.pose();
+        for v in [pose.x, pose.y, pose.theta, body.sonar_cm().unwrap_or(-1.0)] {
+            h.update(v.to_le_bytes());
+        }
+    }
+    format!("{:x}", h.finalize())
+}
+
+#[test]
+fn same_seed_gives_an_identical_trajectory() {
+    assert_eq!(trajectory_hash(), trajectory_hash());
+}

@@ -1,0 +1,47 @@
+//! The `explobot` command line: exit codes and error messages a user sees.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn explobot() -> Command {
+    let exe = std::env::current_exe().unwrap();
+    let path: PathBuf = exe.parent().and_then(Path::parent).unwrap().join("explobot");
+    assert!(path.exists(), "{} missing: cargo test --workspace builds it", path.display());
+    let mut c = Command::new(path);
+    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
+    c
+}
+
+#[test]
+fn a_broken_scenario_is_reported_with_file_line_and_column() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("broken.ron");
+    std::fs::write(&file, "Scenario(\n  name: \"broken\",\n  room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)],\n  start: (row: 0, col: 0, heading: Up),\n)\n").unwrap();
+    let out = explobot().arg("check").arg(&file).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2), "{text}");
+    assert!(text.contains(&format!("{}:4:", file.display())), "{text}");
+    let out = explobot().arg("run").arg(dir.join("missing.ron")).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ron"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn decode_and_encode_round_trip_the_seed_frame() {
+    let out =
+        explobot().args(["encode", "--protocol", "motor", "drive-v1", "0x80", "0x80", "6"]).output().unwrap();
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "AA 03 01 80 80 06 0A");
+    let out = explobot().args(["decode", "--protocol", "motor", "AA 03 01 80 80 06 0A"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("V1 { dir_x: 128, dir_y: 128, gear: 6 }") && text.contains("1 frame(s), 0 error(s)"),
+        "{text}"
+    );
+    let out = explobot().args(["decode", "--protocol", "sensor", "zz"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,0 +1,151 @@
+//! The transport swap, end to end in separate processes: `explobot sim --serve` exposes the
+//! twin's boards on pseudo-terminals, the unchanged `carto` binary opens them as serial ports, and
+//! a client speaking the link protocol over TCP moves the robot one cell and reads its new
+//! position — as Cute would against the real robot.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use std::io::{BufRead, BufReader};
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use protocol::link::{Command as Cmd, Decoder, Direction, GuiMessage, MsgOrder};
+use transport::{Link, TcpLink};
+
+/// Kills the child process when dropped, so a failing test leaves nothing running.
+struct Guard(Child);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// The workspace's binaries sit next to this test's `deps/` folder.
+fn binary(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("test executable path");
+    let dir = exe.parent().and_then(Path::parent).expect("target profile folder");
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is missing: build the workspace binaries first (cargo test --workspace builds them)",
+        path.display()
+    );
+    path
+}
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+fn read_until(
+    link: &mut TcpLink,
+    decoder: &mut Decoder,
+    want: impl Fn(&GuiMessage) -> bool,
+    limit: Duration,
+) -> Vec<GuiMessage> {
+    let deadline = Instant::now() + limit;
+    let mut seen = Vec::new();
+    let mut buf = [0u8; 256];
+    while Instant::now() < deadline {
+        let n = link.read(&mut buf).expect("carto closed the connection");
+        for m in decoder.feed(&buf[..n]) {
+            let m = m.expect("well-formed frame from carto");
+            let done = want(&m);
+            seen.push(m);
+            if done {
+                return seen;
+            }
+        }
+        if n == 0 {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    panic!("timed out; received so far: {seen:?}");
+}
+
+#[test]
+fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf();
+    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&run_dir);
+
+    // 1. The twin, in real time, printing its pose every half second.
+    let mut twin = Command::new(binary("explobot"))
+        .args(["sim", "scenarios/empty.ron", "--serve", "--status-every", "0.5", "--run-dir"])
+        .arg(&run_dir)
+        .current_dir(&root)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start explobot sim --serve");
+    let stdout = twin.stdout.take().unwrap();
+    let twin = Guard(twin);
+    let (tx, lines) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !run_dir.join("tty-sensor").exists() {
+        assert!(Instant::now() < deadline, "the twin did not create its ptys");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+
+    // 2. The unchanged carto binary on those ptys.
+    let port = free_port();
+    let carto = Command::new(binary("carto"))
+        .args(["--transport", "sim", "--motor-port"])
+        .arg(run_dir.join("tty-motor"))
+        .arg("--sensor-port")
+        .arg(run_dir.join("tty-sensor"))
+        .args(["--listen", &format!("127.0.0.1:{port}"), "--profile", "scenarios/robots/mecanum-4wd.ron"])
+        .current_dir(&root)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start carto");
+    let _carto = Guard(carto);
+
+    // 3. A client over TCP, as Cute.
+    let mut link = loop {
+        match TcpLink::connect(("127.0.0.1", port)) {
+            Ok(l) => break l,
+            Err(_) if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(50)),
+            Err(e) => panic!("carto never listened on {port}: {e}"),
+        }
+    };
+    let mut decoder = Decoder::default();
+    let send = |link: &mut TcpLink, m: GuiMessage| {
+        let bytes = m.to_bytes(MsgOrder::BigEndian);
+        assert_eq!(link.write(&bytes).unwrap(), bytes.len());
+    };
+    send(&mut link, GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
+    read_until(&mut link, &mut decoder, |m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(10));
+    send(&mut link, GuiMessage::SendMoveCartography { command: Cmd::Forward });
+    let replies =
+        read_until(&mut link, &mut decoder, |m| *m == GuiMessage::MoveDone, Duration::from_secs(30));
+    assert!(replies.contains(&GuiMessage::SetRobotPosition { x: 0, y: 1 }), "{replies:?}");
+
+    // 4. The twin's physics agrees: the robot now stands in cell (0, 1).
+    let deadline = Instant::now() + Duration::from_secs(5);
+    let mut last = String::new();
+    while Instant::now() < deadline {
+        if let Ok(line) = lines.recv_timeout(Duration::from_millis(200)) {
+            if line.contains("cell (0, 1)") {
+                drop(twin);
+                let _ = std::fs::remove_dir_all(&run_dir);
+                return;
+            }
+            last = line;
+        }
+    }
+    panic!("the twin never reported the robot in cell (0, 1); last status: {last}");
+}

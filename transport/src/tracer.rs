@@ -1,0 +1,235 @@
+//! A wrapper that records every byte through a [`Link`], like smoltcp's `Tracer`: the raw
+//! material for recordings (`links.rec`), replays and determinism hashes.
+//!
+//! Invariants:
+//! - Every byte a `read` returned and every byte a `write` took is recorded exactly once, in call
+//!   order, with the [`Clock`] time of the call and its [`Direction`]; calls that move no bytes
+//!   and errors are not recorded.
+//! - Consecutive calls in the same direction at the same time are merged into one record, so a
+//!   trace does not depend on how reads happened to be chunked within one instant.
+//! - Records stay until taken ([`Tracer::take_records`] or a [`TraceHandle`]).
+//!
+//! ```
+//! use transport::{Direction, Link, MemLink, MockClock, Tracer, TraceRecord};
+//! let clock = MockClock::new();
+//! let (a, mut b) = MemLink::pair(None, clock.clone());
+//! let mut a = Tracer::new(a, clock.clone());
+//! let recording = a.handle(); // can be kept by the runner after `a` is handed over
+//! clock.set_micros(1_500);
+//! a.write(b"go")?;
+//! assert_eq!(
+//!     recording.take(),
+//!     vec![TraceRecord { micros: 1_500, direction: Direction::Written, bytes: b"go".to_vec() }]
+//! );
+//! # Ok::<(), transport::Error>(())
+//! ```
+
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+
+use crate::clock::Clock;
+use crate::link::Link;
+
+/// Which way bytes went through a traced link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Direction {
+    /// Returned by `read`: bytes that came in.
+    Read,
+    /// Taken by `write`: bytes that went out.
+    Written,
+}
+
+/// Bytes that went one way through a link at one time.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct TraceRecord {
+    /// Clock time of the call, µs since the run started.
+    pub micros: u64,
+    /// In or out.
+    pub direction: Direction,
+    /// The bytes, in order.
+    pub bytes: Vec<u8>,
+}
+
+type Records = Arc<Mutex<Vec<TraceRecord>>>;
+
+fn lock(records: &Records) -> MutexGuard<'_, Vec<TraceRecord>> {
+    records.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// A cloneable handle on a [`Tracer`]'s records, for whoever writes the recording.
+#[derive(Debug, Clone)]
+pub struct TraceHandle {
+    records: Records,
+}
+
+impl TraceHandle {
+    /// Takes every record so far, leaving none.
+    pub fn take(&self) -> Vec<TraceRecord> {
+        std::mem::take(&mut *lock(&self.records))
+    }
+
+    /// How many records are waiting.
+    pub fn len(&self) -> usize {
+        lock(&self.records).len()
+    }
+
+    /// Whether no records are waiting.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A link that records its traffic (see the [module docs](self)).
+pub struct Tracer<L> {
+    inner: L,
+    clock: Arc<dyn Clock>,
+    records: Records,
+}
+
+impl<L> std::fmt::Debug for Tracer<L> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tracer").field("records", &lock(&self.records).len()).finish_non_exhaustive()
+    }
+}
+
+impl<L: Link> Tracer<L> {
+    /// Wraps `inner`, stamping records with `clock`.
+    pub fn new(inner: L, clock: impl Clock + 'static) -> Self {
+        Tracer { inner, clock: Arc::new(clock), records: Arc::default() }
+    }
+
+    /// Takes every record so far, leaving none.
+    pub fn take_records(&mut self) -> Vec<TraceRecord> {
+        std::mem::take(&mut *lock(&self.records))
+    }
+
+    /// A handle that can take the records from elsewhere.
+    pub fn handle(&self) -> TraceHandle {
+        TraceHandle { records: Arc::clone(&self.records) }
+    }
+
+    /// The wrapped link.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
+    /// The wrapped link, mutably (bytes moved through it directly are not recorded).
+    pub fn inner_mut(&mut self) -> &mut L {
+        &mut self.inner
+    }
+
+    /// Unwraps, giving back the link (records stay reachable through handles).
+    pub fn into_inner(self) -> L {
+        self.inner
+    }
+
+    fn record(&self, direction: Direction, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        let micros = self.clock.now_micros();
+        let mut records = lock(&self.records);
+        match records.last_mut() {
+            Some(last) if last.micros == micros && last.direction == direction => {
+                last.bytes.extend_from_slice(bytes);
+            }
+            _ => records.push(TraceRecord { micros, direction, bytes: bytes.to_vec() }),
+        }
+    }
+}
+
+impl<L: Link> Link for Tracer<L> {
+    type Error = L::Error;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, L::Error> {
+        let n = self.inner.read(buf)?;
+        self.record(Direction::Read, &buf[..n]);
+        Ok(n)
+    }
+
+    fn write(&mut self, buf: &[u8]) -> Result<usize, L::Error> {
+        let n = self.inner.write(buf)?;
+        self.record(Direction::Written, &buf[..n]);
+        Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::clock::MockClock;
+    use crate::mem::{MemLink, MemLinkConfig};
+
+    fn rec(micros: u64, direction: Direction, bytes: &[u8]) -> TraceRecord {
+        TraceRecord { micros, direction, bytes: bytes.to_vec() }
+    }
+
+    #[test]
+    fn records_reads_and_writes_with_time_and_direction() {
+        let clock = MockClock::new();
+        let (a, mut b) = MemLink::pair(None, clock.clone());
+        let mut a = Tracer::new(a, clock.clone());
+        clock.set_micros(10);
+        a.write(b"ping").unwrap();
+        clock.set_micros(20);
+        b.write(b"pong").unwrap();
+        let mut buf = [0u8; 2];
+        assert_eq!(a.read(&mut buf).unwrap(), 2);
+        clock.set_micros(30);
+        assert_eq!(a.read(&mut buf).unwrap(), 2);
+        assert_eq!(a.read(&mut buf).unwrap(), 0);
+        assert_eq!(
+            a.take_records(),
+            vec![
+                rec(10, Direction::Written, b"ping"),
+                rec(20, Direction::Read, b"po"),
+                rec(30, Direction::Read, b"ng"),
+            ]
+        );
+        assert!(a.take_records().is_empty());
+    }
+
+    #[test]
+    fn records_only_what_a_partial_write_took() {
+        let clock = MockClock::new();
+        let config = MemLinkConfig { baud: None, capacity: 3 };
+        let (a, _b) = MemLink::pair_with(config, clock.clone());
+        let mut a = Tracer::new(a, clock);
+        assert_eq!(a.write(b"abcdef").unwrap(), 3);
+        assert_eq!(a.write(b"def").unwrap(), 0);
+        assert_eq!(a.take_records(), vec![rec(0, Direction::Written, b"abc")]);
+    }
+
+    #[test]
+    fn same_instant_same_direction_is_merged() {
+        let clock = MockClock::new();
+        let (mut a, b) = MemLink::pair(None, clock.clone());
+        let mut b = Tracer::new(b, clock.clone());
+        a.write(b"abcdef").unwrap();
+        let mut buf = [0u8; 1];
+        for _ in 0..6 {
+            b.read(&mut buf).unwrap();
+        }
+        b.write(b"x").unwrap();
+        b.write(b"y").unwrap();
+        assert_eq!(
+            b.take_records(),
+            vec![rec(0, Direction::Read, b"abcdef"), rec(0, Direction::Written, b"xy")]
+        );
+    }
+
+    #[test]
+    fn handle_outlives_the_tracer_and_errors_are_not_recorded() {
+        let clock = MockClock::new();
+        let (a, b) = MemLink::pair(None, clock.clone());
+        let mut a = Tracer::new(a, clock);
+        let handle = a.handle();
+        a.write(b"1").unwrap();
+        drop(b);
+        assert!(a.write(b"2").is_err());
+        assert!(a.read(&mut [0u8; 1]).is_err());
+        drop(a);
+        assert_eq!(handle.len(), 1);
+        assert_eq!(handle.take(), vec![rec(0, Direction::Written, b"1")]);
+        assert!(handle.is_empty());
+    }
+}
