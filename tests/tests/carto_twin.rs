@@ -1,0 +1,322 @@
+//! Carto against the physics twin in lockstep, driven by a scripted client that speaks only the
+//! link protocol: every behaviour of protocols.md §1, checked against where the robot really is.
+//!
+//! The rig is the lockstep runner without Cute: the board twins and the robot's body
+//! ([`sim::twin::Twin`]) behind baud-timed in-memory UARTs, Carto's runtime, and an in-memory
+//! "TCP" listener the test connects to.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use carto::{Carto, CartoConfig, CartoRuntime};
+use protocol::link::{Command, Decoder, Direction, GuiMessage, MsgOrder};
+use robot_model::pose::Pose2;
+use robot_model::time::{Duration, Instant};
+use sim::grid::GridFrame;
+use sim::scenario::LoadedScenario;
+use sim::twin::{Twin, WriteBudget};
+use transport::{Connector, Link, MemConnector, MemLink, MemListener, MockClock, mem_listener};
+
+const DT: Duration = Duration::from_millis(5);
+
+struct Rig {
+    clock: MockClock,
+    now: Instant,
+    twin: Twin,
+    motor: MemLink,
+    sensor: MemLink,
+    carto: CartoRuntime<MemListener, MemLink, MemLink>,
+    connector: MemConnector,
+    frame: GridFrame,
+}
+
+struct Client {
+    link: MemLink,
+    decoder: Decoder,
+    received: Vec<GuiMessage>,
+}
+
+impl Client {
+    fn send(&mut self, m: GuiMessage) {
+        self.send_raw(&m.to_bytes(MsgOrder::BigEndian));
+    }
+
+    fn send_raw(&mut self, bytes: &[u8]) {
+        assert_eq!(self.link.write(bytes).unwrap(), bytes.len());
+    }
+
+    /// Reads what arrived; `false` once Carto closed the connection.
+    fn poll(&mut self) -> bool {
+        let mut buf = [0u8; 256];
+        loop {
+            match self.link.read(&mut buf) {
+                Ok(0) => return true,
+                Ok(n) => {
+                    for m in self.decoder.feed(&buf[..n]) {
+                        self.received.push(m.expect("Carto sends well-formed frames"));
+                    }
+                }
+                Err(_) => return false,
+            }
+        }
+    }
+}
+
+/// An empty 8 x 6 room (plus `obstacles`), robot in cell (2, 2) facing East.
+fn rig(obstacles: &str) -> Rig {
+    let text = format!(
+        "Scenario(name: \"rig\", room: [(0.0, 0.0), (2.5, 0.0), (2.5, 1.9), (0.0, 1.9)], \
+         start: (row: 2, col: 2, heading: East), obstacles: [{obstacles}])"
+    );
+    let loaded = LoadedScenario::from_ron_str(&text, "rig.ron", std::path::Path::new(".")).unwrap();
+    let profile = loaded.profile.clone();
+    let clock = MockClock::new();
+    let (motor_carto, motor) = MemLink::pair(Some(profile.serial.motor_baud), clock.clone());
+    let (sensor_carto, sensor) = MemLink::pair(Some(profile.serial.sensor_baud), clock.clone());
+    let (listener, connector) = mem_listener(None, clock.clone());
+    let carto = CartoRuntime::new(
+        Carto::new(CartoConfig::from_profile(&profile)),
+        listener,
+        motor_carto,
+        sensor_carto,
+    );
+    let frame = GridFrame::for_room(&loaded.scenario.room, loaded.scenario.cell_size(&profile));
+    let mut rig = Rig {
+        clock,
+        now: Instant::ZERO,
+        twin: Twin::new(&loaded, 1, DT),
+        motor,
+        sensor,
+        carto,
+        connector,
+        frame,
+    };
+    rig.run(1.0); // boards power up, readings flow
+    rig
+}
+
+impl Rig {
+    fn step(&mut self) {
+        self.now += DT;
+        self.clock.set_micros(self.now.total_micros());
+        self.twin.board_io(self.now, &mut self.motor, &mut self.sensor, WriteBudget::UNLIMITED);
+        self.carto.step(self.now);
+        self.twin.physics_step(self.now);
+    }
+
+    fn run(&mut self, seconds: f64) {
+        for _ in 0..(seconds / DT.as_secs_f64()).round() as u64 {
+            self.step();
+        }
+    }
+
+    /// Steps until `done` holds for the client (or panics after `seconds`).
+    fn run_until(&mut self, client: &mut Client, seconds: f64, done: impl Fn(&[GuiMessage]) -> bool) {
+        for _ in 0..(seconds / DT.as_secs_f64()).round() as u64 {
+            self.step();
+            client.poll();
+            if done(&client.received) {
+                return;
+            }
+        }
+        panic!("not done after {seconds} s; received {:?}", client.received);
+    }
+
+    fn connect(&mut self) -> Client {
+        let link = self.connector.connect().unwrap();
+        let mut c = Client { link, decoder: Decoder::default(), received: Vec::new() };
+        self.run(0.05);
+        c.poll();
+        c
+    }
+
+    /// A connected client whose pose Carto has acknowledged: (2, 2) facing East.
+    fn ready_client(&mut self) -> Client {
+        let mut c = self.connect();
+        c.send(GuiMessage::SendRobotPosition { x: 2, y: 2, direction: Direction::East });
+        self.run_until(&mut c, 2.0, |r| r.contains(&GuiMessage::RobotPositionReceived));
+        c.received.clear();
+        c
+    }
+
+    fn pose(&self) -> Pose2 {
+        self.twin.body().pose()
+    }
+
+    fn centre(&self, row: usize, col: usize) -> (f32, f32) {
+        self.frame.cell_center(row, col)
+    }
+
+    fn wheels_commanded_to_zero(&self) -> bool {
+        self.twin.motor_board().wheel_setpoints_rpm().iter().all(|w| *w == 0.0)
+    }
+}
+
+fn count(r: &[GuiMessage], pred: impl Fn(&GuiMessage) -> bool) -> usize {
+    r.iter().filter(|m| pred(m)).count()
+}
+
+#[test]
+fn forward_with_the_way_clear_moves_one_cell_in_the_physics_world() {
+    let mut rig = rig("");
+    let mut c = rig.ready_client();
+    c.send(GuiMessage::SendMoveCartography { command: Command::Forward });
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(c.received, vec![GuiMessage::SetRobotPosition { x: 2, y: 3 }, GuiMessage::MoveDone]);
+    rig.run(0.5);
+    let (x, y) = rig.centre(2, 3);
+    let p = rig.pose();
+    assert!((p.x - x).abs() <= 0.01 && (p.y - y).abs() <= 0.01, "robot at {p:?}, cell centre ({x}, {y})");
+}
+
+#[test]
+fn forward_with_a_box_ahead_reports_the_obstacle_and_does_not_move() {
+    // A box filling most of cell (2, 3), right ahead of the robot.
+    let mut rig = rig("Box(center: (1.1, 1.1), size: (0.2, 0.2))");
+    let before = rig.pose();
+    let mut c = rig.ready_client();
+    c.send(GuiMessage::SendMoveCartography { command: Command::Forward });
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(c.received, vec![GuiMessage::SetObstaclePosition { x: 2, y: 3 }, GuiMessage::MoveDone]);
+    let after = rig.pose();
+    assert!(
+        (after.x - before.x).abs() < 0.005 && (after.y - before.y).abs() < 0.005,
+        "{before:?} -> {after:?}"
+    );
+    assert_eq!(rig.twin.body().world().collisions(), 0);
+}
+
+#[test]
+fn right_turns_the_physical_heading_by_minus_90_degrees() {
+    let mut rig = rig("");
+    let before = rig.pose().theta;
+    let mut c = rig.ready_client();
+    c.send(GuiMessage::SendMoveCartography { command: Command::Right });
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(c.received, vec![GuiMessage::MoveDone]);
+    rig.run(0.5);
+    let turned = (rig.pose().theta - before).to_degrees();
+    assert!((turned + 90.0).abs() <= 2.0, "turned {turned:.2} deg");
+}
+
+#[test]
+fn a_batch_of_six_reports_each_forward_then_move_done() {
+    let mut rig = rig("");
+    let mut c = rig.ready_client();
+    // F F RIGHT F LEFT F from (2, 2) East: (2, 3), (2, 4), turn South, (3, 4), turn East, (3, 5).
+    for cmd in [
+        Command::Forward,
+        Command::Forward,
+        Command::Right,
+        Command::Forward,
+        Command::Left,
+        Command::Forward,
+    ] {
+        c.send(GuiMessage::SendMovesTrajectory { n_total: 6, command: cmd });
+    }
+    rig.run_until(&mut c, 40.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(
+        c.received,
+        vec![
+            GuiMessage::SetRobotPosition { x: 2, y: 3 },
+            GuiMessage::SetRobotPosition { x: 2, y: 4 },
+            GuiMessage::SetRobotPosition { x: 3, y: 4 },
+            GuiMessage::SetRobotPosition { x: 3, y: 5 },
+            GuiMessage::MoveDone,
+        ]
+    );
+    rig.run(0.5);
+    let (x, y) = rig.centre(3, 5);
+    let p = rig.pose();
+    assert!((p.x - x).abs() <= 0.01 && (p.y - y).abs() <= 0.01, "robot at {p:?}, cell centre ({x}, {y})");
+}
+
+#[test]
+fn stop_in_the_middle_of_a_batch_zeroes_the_wheels_within_100_ms_and_drops_the_rest() {
+    let mut rig = rig("");
+    let mut c = rig.ready_client();
+    for _ in 0..4 {
+        c.send(GuiMessage::SendMovesTrajectory { n_total: 4, command: Command::Forward });
+    }
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::SetRobotPosition { x: 2, y: 3 }));
+    rig.run(0.5); // in the middle of the second FORWARD
+    assert!(!rig.wheels_commanded_to_zero(), "the robot should be driving");
+    c.send(GuiMessage::StopRobot);
+    let mut stopped_after = None;
+    for i in 1..=20 {
+        rig.step();
+        if rig.wheels_commanded_to_zero() {
+            stopped_after = Some(i * 5);
+            break;
+        }
+    }
+    let ms = stopped_after.expect("the motor board never got a zero command");
+    assert!(ms <= 100, "wheels stopped after {ms} ms");
+    // Nothing else happens: no more positions, no MOVE_DONE, the robot stays put.
+    rig.run(1.0);
+    let at = rig.pose();
+    rig.run(5.0);
+    c.poll();
+    assert_eq!(c.received, vec![GuiMessage::SetRobotPosition { x: 2, y: 3 }]);
+    let p = rig.pose();
+    assert!((p.x - at.x).abs() < 0.002 && (p.y - at.y).abs() < 0.002);
+    assert!(rig.wheels_commanded_to_zero());
+}
+
+#[test]
+fn a_second_client_is_refused_and_a_disconnect_stops_the_motors() {
+    let mut rig = rig("");
+    let mut first = rig.ready_client();
+    let mut second = rig.connect();
+    rig.run(0.1);
+    assert!(!second.poll(), "the second client should have been closed");
+    assert!(first.poll(), "the first client must stay connected");
+    assert!(rig.carto.stats().refused >= 1);
+
+    first.send(GuiMessage::SendMoveCartography { command: Command::Forward });
+    rig.run(0.8);
+    assert!(!rig.wheels_commanded_to_zero(), "moving");
+    drop(first);
+    rig.run(0.1);
+    assert!(rig.wheels_commanded_to_zero(), "a disconnect stops the motors");
+    // The server waits for the next client and serves it.
+    let mut third = rig.ready_client();
+    third.send(GuiMessage::SendMoveCartography { command: Command::Left });
+    rig.run_until(&mut third, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+}
+
+#[test]
+fn malformed_input_is_handled_as_specified_and_the_server_keeps_serving() {
+    let mut rig = rig("");
+
+    // Size 0: a fatal framing error, this connection is closed.
+    let mut c = rig.connect();
+    c.send_raw(&[0x00, 0x00, 0x01, 0x00]);
+    rig.run(0.1);
+    assert!(!c.poll(), "Size 0 closes the connection");
+
+    // Size 9000 (above the 1024 maximum): closed as well.
+    let mut c = rig.connect();
+    c.send_raw(&[0x23, 0x28, 0x01, 0x00, 0x06, 0x00]);
+    rig.run(0.1);
+    assert!(!c.poll(), "Size 9000 closes the connection");
+
+    // An unknown Msg is ignored with no reply; a little-endian Msg is accepted; a frame written one
+    // byte at a time is reassembled.
+    let mut c = rig.connect();
+    c.send_raw(&[0x00, 0x03, 0x0A, 0x00, 0x07]);
+    rig.run(0.1);
+    assert!(c.poll());
+    assert!(c.received.is_empty(), "unknown Msg: no reply, got {:?}", c.received);
+    c.send_raw(&[0x00, 0x05, 0x00, 0x07, 0x02, 0x02, 0x03]); // SEND_ROBOT_POSITION, Msg little-endian
+    rig.run_until(&mut c, 2.0, |r| r.contains(&GuiMessage::RobotPositionReceived));
+    c.received.clear();
+    let forward = GuiMessage::SendMoveCartography { command: Command::Forward }.to_bytes(MsgOrder::BigEndian);
+    for b in forward {
+        c.send_raw(&[b]);
+        rig.step();
+    }
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(c.received, vec![GuiMessage::SetRobotPosition { x: 2, y: 3 }, GuiMessage::MoveDone]);
+    let stats = rig.carto.carto().stats();
+    assert_eq!((stats.fatal_errors, stats.unknown_messages), (2, 1), "{stats:?}");
+}
