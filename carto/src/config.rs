@@ -17,7 +17,7 @@
 //! ```
 
 use protocol::motor::ChecksumPolicy;
-use robot_model::profile::{ChecksumSetting, RobotProfile};
+use robot_model::profile::RobotProfile;
 use robot_model::time::Duration;
 
 /// Everything Carto needs to know about the robot and how to drive it.
@@ -203,11 +203,7 @@ impl CartoConfig {
             peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
             motor_baud: profile.serial.motor_baud,
             sensor_baud: profile.serial.sensor_baud,
-            motor_checksum: match profile.motor_board.checksum {
-                ChecksumSetting::Sum => ChecksumPolicy::Sum,
-                ChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
-                ChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
-            },
+            motor_checksum: ChecksumPolicy::from(profile.motor_board.checksum),
             ..CartoConfig::default()
         }
     }

@@ -39,9 +39,8 @@ use std::path::{Path, PathBuf};
 use bevy::DefaultPlugins;
 use bevy::app::{App, AppExit, Plugin, PluginGroup, PluginGroupBuilder, Startup, Update};
 use bevy::asset::{Assets, Handle, RenderAssetUsages};
-use bevy::camera::visibility::Visibility;
 use bevy::color::Color;
-use bevy::core_pipeline::core_2d::Camera2d;
+use bevy::ecs::component::Mutable;
 use bevy::ecs::message::MessageWriter;
 use bevy::ecs::observer::On;
 use bevy::ecs::schedule::IntoScheduleConfigs;
@@ -52,7 +51,7 @@ use bevy::image::{Image, ImageSampler};
 use bevy::input::ButtonInput;
 use bevy::input::mouse::MouseButton;
 use bevy::math::{Rect, Vec2, Vec3};
-use bevy::prelude::{Component, Resource, Transform, With};
+use bevy::prelude::{Camera2d, Component, Resource, Transform, Visibility, With};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::sprite::Sprite;
@@ -76,7 +75,7 @@ const LOG_LINES: usize = 6;
 pub const BACKGROUND: Color = Color::srgb(0.16, 0.17, 0.20);
 
 /// A resource that gives access to a [`Cute`] session.
-pub trait CuteAccess: Resource {
+pub trait CuteAccess: Resource<Mutability = Mutable> {
     /// The session, to draw.
     fn cute(&self) -> &Cute;
     /// The session, for user actions and events.

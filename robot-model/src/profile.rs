@@ -230,6 +230,27 @@ pub enum ChecksumSetting {
     ConstFc,
 }
 
+impl From<ChecksumSetting> for protocol::motor::ChecksumKind {
+    fn from(s: ChecksumSetting) -> Self {
+        match s {
+            ChecksumSetting::Sum => protocol::motor::ChecksumKind::Sum,
+            ChecksumSetting::XorPayload => protocol::motor::ChecksumKind::XorPayload,
+            ChecksumSetting::ConstFc => protocol::motor::ChecksumKind::ConstFc,
+        }
+    }
+}
+
+impl From<ChecksumSetting> for protocol::motor::ChecksumPolicy {
+    /// The receive policy that checks what a board with this setting sends.
+    fn from(s: ChecksumSetting) -> Self {
+        match s {
+            ChecksumSetting::Sum => protocol::motor::ChecksumPolicy::Sum,
+            ChecksumSetting::XorPayload => protocol::motor::ChecksumPolicy::XorPayload,
+            ChecksumSetting::ConstFc => protocol::motor::ChecksumPolicy::ConstFc,
+        }
+    }
+}
+
 /// Checksums the motor board accepts on the frames it receives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum AcceptChecksumSetting {
@@ -241,6 +262,17 @@ pub enum AcceptChecksumSetting {
     ConstFc,
     /// Any checksum byte (what every real firmware receiver does).
     Ignore,
+}
+
+impl From<AcceptChecksumSetting> for protocol::motor::ChecksumPolicy {
+    fn from(s: AcceptChecksumSetting) -> Self {
+        match s {
+            AcceptChecksumSetting::Sum => protocol::motor::ChecksumPolicy::Sum,
+            AcceptChecksumSetting::XorPayload => protocol::motor::ChecksumPolicy::XorPayload,
+            AcceptChecksumSetting::ConstFc => protocol::motor::ChecksumPolicy::ConstFc,
+            AcceptChecksumSetting::Ignore => protocol::motor::ChecksumPolicy::Ignore,
+        }
+    }
 }
 
 /// Motor board firmware behaviour.

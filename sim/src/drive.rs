@@ -17,7 +17,11 @@
 //! left and `ω` counter-clockwise — the same convention as the drive v2 frame.
 //!
 //! `k` is chosen so that one step removes half a wheel's slip on its own (`k = 0.5·(m/4)/dt`),
-//! which keeps the explicit force stable at any step size the scenarios allow.
+//! capped so that the stiffest mode of the body stays stable. With four wheels the slip decays in
+//! three modes — along x (`4cos²α/m`), along y (`4sin²α/m`) and in yaw
+//! (`4(lx·sin α + ly·cos α)²/I`, with `I` the body's moment of inertia) — and an explicit step is
+//! stable while `k·dt·λ < 2` for each; `k ≤ 1/(dt·λ_max)` keeps a factor 2 of margin for any body
+//! shape and step size (for the default robot the cap is 46 N·s/m and the rule gives 40).
 
 use robot_model::profile::RobotProfile;
 
@@ -67,11 +71,18 @@ impl DriveTrain {
             Wheel { x, y, ax: a.cos(), ay: a.sin(), cos_alpha: a.cos() }
         };
         let mass = g.mass_kg;
+        let dt = dt.max(1e-4);
+        // The body is a uniform box (as the collider): I = m·(L² + W²)/12.
+        let inertia = mass * (g.body_length_m.powi(2) + g.body_width_m.powi(2)) / 12.0;
+        let (sin, cos) = (alpha.sin().abs(), alpha.cos().abs());
+        let lambda =
+            [4.0 * cos * cos / mass, 4.0 * sin * sin / mass, 4.0 * (lx * sin + ly * cos).powi(2) / inertia];
+        let lambda_max = lambda.into_iter().fold(0.0f32, f32::max);
         DriveTrain {
             wheels: [wheel(lx, ly, -1.0), wheel(lx, -ly, 1.0), wheel(-lx, ly, 1.0), wheel(-lx, -ly, -1.0)],
             radius: g.wheel_radius_m,
             max_force: profile.wheels.friction_mu * mass * GRAVITY / 4.0,
-            slip_gain: 0.5 * (mass / 4.0) / dt.max(1e-4),
+            slip_gain: (0.5 * (mass / 4.0) / dt).min(1.0 / (dt * lambda_max)),
             roller_damping: ROLLER_DAMPING,
             last_slip: [0.0; 4],
         }

@@ -142,6 +142,18 @@ fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
     query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
 }
 
+/// Width and height of a polygon's bounding box, metres.
+pub fn room_extent(room: &[(f32, f32)]) -> (f32, f32) {
+    let (mut min_x, mut min_y, mut max_x, mut max_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
+    for &(x, y) in room {
+        min_x = min_x.min(x);
+        max_x = max_x.max(x);
+        min_y = min_y.min(y);
+        max_y = max_y.max(y);
+    }
+    ((max_x - min_x).max(0.0), (max_y - min_y).max(0.0))
+}
+
 /// The room polygon's edges as segments.
 pub fn room_edges(room: &[(f32, f32)]) -> impl Iterator<Item = Segment> + '_ {
     (0..room.len()).map(move |i| {
@@ -216,13 +228,13 @@ mod tests {
 
     #[test]
     fn obstacles_block_the_cells_they_touch() {
-        // A box over the centre of cell (1, 1) and a leg straddling cells (0, 2) and (0, 3).
+        // A box over the centre of cell (1, 1) and a leg straddling columns 1 and 2 of row 0 (x = 0.65).
         let s = scenario(
             "Box(center: (0.5, 0.475), size: (0.1, 0.1)), Circle(center: (0.65, 0.8), radius: 0.02)",
         );
         let g = TruthGrid::build(&s, &RobotProfile::default());
         assert!(!g.is_free(1, 1));
-        assert!(!g.is_free(0, 1) || !g.is_free(0, 2));
+        assert!(!g.is_free(0, 1) && !g.is_free(0, 2));
         assert!(g.is_free(2, 3));
         let reach = g.reachable_from((0, 0));
         assert!(!reach[g.cols + 1]);

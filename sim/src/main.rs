@@ -14,7 +14,7 @@ use sim::mapimg::MapPicture;
 use sim::record::{FORMAT_VERSION, Recording, first_divergence};
 use sim::report::Report;
 use sim::runner::Lockstep;
-use sim::scenario::{DEFAULT_SCENARIO, LoadedScenario};
+use sim::scenario::LoadedScenario;
 use sim::wiretool::{self, Protocol};
 
 #[derive(Parser)]
@@ -261,13 +261,7 @@ fn run_headless(loaded: LoadedScenario, seed: Option<u64>, quiet: bool) -> Resul
 
 fn run(scenario: Option<&Path>, seed: Option<u64>, out: Option<PathBuf>, quiet: bool) -> Result<ExitCode> {
     let loaded = load(scenario)?;
-    let (text, label) = match scenario {
-        Some(p) => (
-            std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?,
-            p.display().to_string(),
-        ),
-        None => (DEFAULT_SCENARIO.to_string(), "<built-in default room>".to_string()),
-    };
+    let (text, label) = (loaded.text.clone(), loaded.label.clone());
     let out = out.unwrap_or_else(|| Path::new("runs").join(&loaded.scenario.name));
     let profile_ron = loaded.profile.to_ron_string().context("writing the profile into the recording")?;
     let (run, wall) = run_headless(loaded, seed, quiet)?;
@@ -367,13 +361,11 @@ fn sim_serve(
 
 fn replay(path: &Path) -> Result<ExitCode> {
     let rec = Recording::load(path)?;
-    let mut loaded = LoadedScenario::from_ron_str(&rec.scenario_ron, &rec.scenario_label, Path::new("."))
-        .or_else(|_| {
-            // A scenario naming a profile file that is not here: the recording carries the profile.
-            let mut s = sim::scenario::Scenario::from_ron_str(&rec.scenario_ron, &rec.scenario_label)?;
-            s.robot = None;
-            LoadedScenario::from_scenario(s)
-        })?;
+    // The recording carries the profile that ran, so the scenario's own `robot` file is not
+    // needed (nor read): the run is rebuilt from the recording alone.
+    let mut scenario = sim::scenario::Scenario::from_ron_str(&rec.scenario_ron, &rec.scenario_label)?;
+    scenario.robot = None;
+    let mut loaded = LoadedScenario::from_scenario(scenario)?;
     loaded.profile = robot_model::profile::RobotProfile::from_ron_str(&rec.profile_ron, "<recorded profile>")
         .context("the recording's robot profile")?;
     println!("replaying {} (seed {}) ...", rec.scenario_label, rec.seed);

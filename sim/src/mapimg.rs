@@ -13,8 +13,10 @@ use rapier2d::parry::shape::Shape;
 use crate::grid::{GridFrame, obstacle_shape, point_in_polygon};
 use crate::scenario::Scenario;
 
-/// Pixels per metre.
+/// Pixels per metre for rooms up to ~25 m; larger rooms are scaled down to fit [`MAX_SIDE`].
 const SCALE: f32 = 160.0;
+/// Longest side of the picture, pixels.
+const MAX_SIDE: f32 = 4096.0;
 /// Border around the room, pixels.
 const BORDER: u32 = 12;
 
@@ -38,16 +40,18 @@ impl MapPicture<'_> {
     /// Renders the picture.
     pub fn render(&self) -> RgbImage {
         let (min_x, min_y, max_x, max_y) = bounds(&self.scenario.room);
-        let w = ((max_x - min_x) * SCALE) as u32 + 2 * BORDER;
-        let h = ((max_y - min_y) * SCALE) as u32 + 2 * BORDER;
+        let extent = (max_x - min_x).max(max_y - min_y).max(1e-3);
+        let scale = SCALE.min(MAX_SIDE / extent);
+        let w = ((max_x - min_x) * scale).clamp(1.0, MAX_SIDE) as u32 + 2 * BORDER;
+        let h = ((max_y - min_y) * scale).clamp(1.0, MAX_SIDE) as u32 + 2 * BORDER;
         let to_world = |px: u32, py: u32| {
             (
-                min_x + (px as f32 + 0.5 - BORDER as f32) / SCALE,
-                max_y - (py as f32 + 0.5 - BORDER as f32) / SCALE,
+                min_x + (px as f32 + 0.5 - BORDER as f32) / scale,
+                max_y - (py as f32 + 0.5 - BORDER as f32) / scale,
             )
         };
         let to_px =
-            |x: f32, y: f32| ((x - min_x) * SCALE + BORDER as f32, (max_y - y) * SCALE + BORDER as f32);
+            |x: f32, y: f32| ((x - min_x) * scale + BORDER as f32, (max_y - y) * scale + BORDER as f32);
         let shapes: Vec<_> = self.scenario.obstacles.iter().filter_map(obstacle_shape).collect();
         let mut img = RgbImage::new(w.max(1), h.max(1));
         for (px, py, pixel) in img.enumerate_pixels_mut() {

@@ -102,17 +102,29 @@ impl Recording {
             .map_err(|source| RecordingError::Io { path: path.display().to_string(), source })
     }
 
-    /// Reads a recording from `path`.
+    /// Reads a recording from `path`. The format version (the first field) is checked before
+    /// the rest is decoded, and decoding is bounded by the file's size, so a damaged or foreign
+    /// file is an error, never an abort.
     pub fn load(path: &Path) -> Result<Recording, RecordingError> {
         let label = path.display().to_string();
         let bytes =
             std::fs::read(path).map_err(|source| RecordingError::Io { path: label.clone(), source })?;
-        let (rec, _): (Recording, usize) =
-            bincode::serde::decode_from_slice(&bytes, bincode::config::standard())
-                .map_err(|e| RecordingError::Decode { path: label.clone(), message: e.to_string() })?;
-        if rec.version != FORMAT_VERSION {
-            return Err(RecordingError::Version { path: label, found: rec.version });
+        let decode_error = |e: bincode::error::DecodeError| RecordingError::Decode {
+            path: label.clone(),
+            message: e.to_string(),
+        };
+        let (version, _): (u32, usize) =
+            bincode::serde::decode_from_slice(&bytes, bincode::config::standard()).map_err(decode_error)?;
+        if version != FORMAT_VERSION {
+            return Err(RecordingError::Version { path: label, found: version });
         }
+        // No length prefix inside the file can claim more than the file holds.
+        let config = bincode::config::standard().with_limit::<{ 1 << 31 }>();
+        if bytes.len() >= 1 << 31 {
+            return Err(RecordingError::Decode { path: label, message: "file larger than 2 GiB".into() });
+        }
+        let (rec, _): (Recording, usize) =
+            bincode::serde::decode_from_slice(&bytes, config).map_err(decode_error)?;
         Ok(rec)
     }
 
@@ -210,7 +222,14 @@ pub fn first_divergence(recorded: &[EndpointLog], replayed: &[EndpointLog]) -> O
             }
         }
     }
-    found.into_iter().min_by_key(|d| d.recorded_micros.min(d.replayed_micros).unwrap_or(u64::MAX))
+    // Rank by the earliest time present: a stream that ended early diverges at its other side's
+    // time, not "never".
+    let key = |d: &Divergence| match (d.recorded_micros, d.replayed_micros) {
+        (Some(a), Some(b)) => a.min(b),
+        (Some(t), None) | (None, Some(t)) => t,
+        (None, None) => u64::MAX,
+    };
+    found.into_iter().min_by_key(key)
 }
 
 fn chunks_of<'a>(logs: &'a [EndpointLog], link: &str, endpoint: &str) -> Option<&'a Vec<Chunk>> {
@@ -262,6 +281,17 @@ mod tests {
     }
 
     #[test]
+    fn an_early_end_of_stream_ranks_by_its_time() {
+        // Stream A ends at 1 s on replay; stream B differs at 100 s. A comes first.
+        let a = log(vec![(1_000_000, Dir::Read, &[1, 2]), (100_000_000, Dir::Write, &[7])]);
+        let mut b = a.clone();
+        b[0].chunks[0].bytes.truncate(1);
+        b[0].chunks[1].bytes[0] = 8;
+        let d = first_divergence(&a, &b).unwrap();
+        assert_eq!((d.dir, d.replayed), (Dir::Read, None));
+    }
+
+    #[test]
     fn save_and_load_round_trip_and_bad_files_are_errors() {
         let dir = std::env::temp_dir().join(format!("explobot-rec-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -278,6 +308,11 @@ mod tests {
         assert_eq!(Recording::load(&path).unwrap(), rec);
         std::fs::write(&path, b"\x01\x02garbage").unwrap();
         assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
+        // Version 1, then a string claiming an enormous length: an error, not an allocation abort.
+        std::fs::write(&path, [1u8, 0xFD, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F]).unwrap();
+        assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
+        std::fs::write(&path, [7u8, 0, 0]).unwrap();
+        assert!(matches!(Recording::load(&path), Err(RecordingError::Version { found: 7, .. })));
         assert!(matches!(Recording::load(&dir.join("missing.rec")), Err(RecordingError::Io { .. })));
         std::fs::remove_dir_all(&dir).unwrap();
     }

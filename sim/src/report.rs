@@ -18,9 +18,9 @@ use crate::scenario::Expectations;
 /// Traffic on one direction of one link.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct DirectionStats {
-    /// Bytes sent.
+    /// Bytes the sender wrote.
     pub bytes: u64,
-    /// Frames the receiver decoded.
+    /// Frames the receiver decoded (after any injected faults).
     pub frames: u64,
     /// Frames the receiver rejected (bad checksum, bad length, framing).
     pub errors: u64,

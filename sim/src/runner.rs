@@ -18,7 +18,6 @@ use carto::{Carto, CartoConfig, CartoRuntime};
 use cute::{CellValue, Cute, CuteConfig, CuteError, Status};
 use protocol::link;
 use protocol::motor::ChecksumPolicy;
-use robot_model::profile::{AcceptChecksumSetting, ChecksumSetting};
 use robot_model::time::{Duration, Instant};
 use transport::{
     ByteFaults, Connector, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock,
@@ -29,7 +28,7 @@ use crate::body::RobotBody;
 use crate::grid::{GridFrame, TruthGrid};
 use crate::record::{Chunk, Dir, EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
-use crate::scenario::{Fault, Heading, LinkFaults, LoadedScenario, Step};
+use crate::scenario::{Fault, LinkFaults, LoadedScenario, Step};
 use crate::twin::{Twin, WriteBudget, read_all};
 
 /// Cute's end of the Cute ⇄ Carto link.
@@ -200,6 +199,7 @@ pub struct Lockstep {
     cute: CuteSide,
     operator: Operator,
     faults: Vec<Fault>,
+    faults_fired: Vec<bool>,
     truth: TruthGrid,
     traces: Vec<(String, String, TraceHandle)>,
     logs: Vec<EndpointLog>,
@@ -245,12 +245,7 @@ impl Lockstep {
             rows: truth.rows,
             cols: truth.cols,
             start: (start.row, start.col),
-            heading: match start.heading {
-                Heading::South => cute::Heading::South,
-                Heading::North => cute::Heading::North,
-                Heading::West => cute::Heading::West,
-                Heading::East => cute::Heading::East,
-            },
+            heading: start.heading.into(),
             ..CuteConfig::default()
         })?;
         let max = Instant::from_secs_f64(f64::from(scenario.physics.max_sim_s));
@@ -278,6 +273,7 @@ impl Lockstep {
                 fault_counts: 0,
             },
             operator,
+            faults_fired: vec![false; faults.len()],
             faults,
             truth,
             clock,
@@ -298,11 +294,11 @@ impl Lockstep {
         self.clock.set_micros(now.total_micros());
         self.steps += 1;
 
-        for fault in &self.faults {
+        for (fault, fired) in self.faults.iter().zip(self.faults_fired.iter_mut()) {
             match fault {
                 Fault::GuiDisconnect { at_s } => {
-                    let at = Instant::from_secs_f64(f64::from(*at_s));
-                    if at <= now && at > now - self.dt {
+                    if !*fired && Instant::from_secs_f64(f64::from(*at_s)) <= now {
+                        *fired = true;
                         self.cute.drop_link(now);
                     }
                 }
@@ -356,7 +352,13 @@ impl Lockstep {
     }
 
     fn collect_traces(&mut self) {
-        let cute_traces = self.cute.traces.iter().map(|h| ("gui".to_string(), "cute".to_string(), h.clone()));
+        // Each connection Cute makes is its own endpoint log: `cute#1`, `cute#2`, …
+        let cute_traces = self
+            .cute
+            .traces
+            .iter()
+            .enumerate()
+            .map(|(i, h)| ("gui".to_string(), format!("cute#{}", i + 1), h.clone()));
         let all: Vec<_> = self.traces.iter().cloned().chain(cute_traces).collect();
         for (link, endpoint, handle) in all {
             let records = handle.take();
@@ -536,19 +538,11 @@ impl Lockstep {
         let got_out = self.stream(name, board, Dir::Read);
         let sent_in = self.stream(name, board, Dir::Write);
         let got_in = self.stream(name, carto, Dir::Read);
-        // Each direction is judged by the checksum its sender uses, so errors are corruption.
+        // Carto → board is judged by the board's receive policy, board → Carto by the checksum
+        // the board sends: with matching settings, every error is corruption on the line.
         let board = &self.loaded.profile.motor_board;
-        let out_policy = match board.accept_checksum {
-            AcceptChecksumSetting::Sum => ChecksumPolicy::Sum,
-            AcceptChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
-            AcceptChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
-            AcceptChecksumSetting::Ignore => ChecksumPolicy::Ignore,
-        };
-        let in_policy = match board.checksum {
-            ChecksumSetting::Sum => ChecksumPolicy::Sum,
-            ChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
-            ChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
-        };
+        let out_policy = ChecksumPolicy::from(board.accept_checksum);
+        let in_policy = ChecksumPolicy::from(board.checksum);
         LinkStats {
             name: name.to_string(),
             outbound: direction_stats(sent_out.len(), &got_out, proto, out_policy),
@@ -556,15 +550,27 @@ impl Lockstep {
         }
     }
 
+    /// The Cute ⇄ Carto link. Cute's tracer sits before its fault injector, so what Carto
+    /// received (frames, framing errors) comes from Carto's own counters; what Cute received is
+    /// decoded per connection (a partial frame at a disconnect must not spill into the next).
     fn gui_stats(&self) -> LinkStats {
-        let out = self.stream("gui", "cute", Dir::Write);
-        let inb = self.stream("gui", "cute", Dir::Read);
-        let policy = ChecksumPolicy::default();
-        LinkStats {
-            name: "gui".to_string(),
-            outbound: direction_stats(out.len(), &out, Proto::Link, policy),
-            inbound: direction_stats(inb.len(), &inb, Proto::Link, policy),
+        let carto = self.carto.carto().stats();
+        let runtime = self.carto.stats();
+        let mut outbound = DirectionStats {
+            bytes: 0,
+            frames: carto.client_frames_in,
+            errors: carto.protocol_errors + carto.fatal_errors,
+        };
+        let mut inbound = DirectionStats { bytes: runtime.client_bytes_out, frames: 0, errors: 0 };
+        for log in self.logs.iter().filter(|l| l.link == "gui") {
+            let sent = self.stream("gui", &log.endpoint, Dir::Write);
+            outbound.bytes += sent.len() as u64;
+            let got = self.stream("gui", &log.endpoint, Dir::Read);
+            let d = direction_stats(0, &got, Proto::Link, ChecksumPolicy::default());
+            inbound.frames += d.frames;
+            inbound.errors += d.errors;
         }
+        LinkStats { name: "gui".to_string(), outbound, inbound }
     }
 }
 
@@ -579,22 +585,9 @@ enum Proto {
 fn direction_stats(sent: usize, received: &[u8], proto: Proto, policy: ChecksumPolicy) -> DirectionStats {
     let (frames, errors) = match proto {
         Proto::Link => {
+            // One connection's bytes: a fatal framing error ends what can be decoded.
             let mut d = link::Decoder::default();
-            let mut errors = 0;
-            let mut rest = received;
-            // A fatal framing error closes a connection; the next bytes belong to a new one.
-            while !rest.is_empty() {
-                let take = rest.len().min(4096);
-                for item in d.feed(&rest[..take]) {
-                    if item.is_err() {
-                        errors += 1;
-                    }
-                }
-                if d.is_failed() {
-                    d.reset();
-                }
-                rest = &rest[take..];
-            }
+            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
             (d.stats().frames, errors)
         }
         Proto::Motor => {

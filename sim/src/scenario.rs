@@ -59,6 +59,17 @@ impl Heading {
     }
 }
 
+impl From<Heading> for cute::Heading {
+    fn from(h: Heading) -> Self {
+        match h {
+            Heading::South => cute::Heading::South,
+            Heading::North => cute::Heading::North,
+            Heading::West => cute::Heading::West,
+            Heading::East => cute::Heading::East,
+        }
+    }
+}
+
 /// A static obstacle in the room.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Obstacle {
@@ -295,6 +306,10 @@ pub struct LoadedScenario {
     pub profile: RobotProfile,
     /// Where the scenario came from (`None` for the built-in default).
     pub path: Option<PathBuf>,
+    /// The scenario's text, as parsed (what a recording stores).
+    pub text: String,
+    /// How errors and recordings name the scenario (its path, or `<built-in default room>`).
+    pub label: String,
 }
 
 impl Scenario {
@@ -344,21 +359,38 @@ impl Scenario {
         if !(self.physics.max_sim_s.is_finite() && self.physics.max_sim_s > 0.0) {
             return Err(Invalid::at("max_sim_s", "max_sim_s must be positive"));
         }
-        for o in &self.obstacles {
+        for (i, o) in self.obstacles.iter().enumerate() {
+            let positive = |v: f32| v.is_finite() && v > 0.0;
             let ok = match o {
                 Obstacle::Box { center, size, angle_deg } => {
-                    finite2(*center) && size.0 > 0.0 && size.1 > 0.0 && angle_deg.is_finite()
+                    finite2(*center) && positive(size.0) && positive(size.1) && angle_deg.is_finite()
                 }
-                Obstacle::Circle { center, radius } => finite2(*center) && *radius > 0.0,
+                Obstacle::Circle { center, radius } => finite2(*center) && positive(*radius),
                 Obstacle::Segment { from, to } => finite2(*from) && finite2(*to) && from != to,
-                Obstacle::Polygon { points } => points.len() >= 3 && points.iter().all(|p| finite2(*p)),
+                // A polygon whose points are all on a line has no convex hull.
+                Obstacle::Polygon { points } => {
+                    points.iter().all(|p| finite2(*p)) && crate::grid::obstacle_shape(o).is_some()
+                }
             };
             if !ok {
                 return Err(Invalid::at(
                     "obstacles",
-                    "an obstacle has a non-finite, empty or negative dimension",
+                    &format!(
+                        "obstacle {i} (counting from 0) has a non-finite, empty, negative or flat shape"
+                    ),
                 ));
             }
+        }
+        for fault in &self.faults {
+            let Fault::GuiDisconnect { at_s } = fault;
+            if !(at_s.is_finite() && *at_s >= 0.0) {
+                return Err(Invalid::at("at_s", "fault times are zero or positive seconds"));
+            }
+        }
+        if let Some(limit) = self.expect.finish_within_s
+            && !(limit.is_finite() && limit > 0.0)
+        {
+            return Err(Invalid::at("finish_within_s", "finish_within_s must be positive"));
         }
         for links in [&self.links.motor, &self.links.sensor, &self.links.gui] {
             if !(0.0..=1.0).contains(&links.corrupt_rate) || !(0.0..=1.0).contains(&links.drop_rate) {
@@ -372,7 +404,7 @@ impl Scenario {
             if let Step::Wait(s) = step
                 && !(s.is_finite() && *s >= 0.0)
             {
-                return Err(Invalid::at("Wait", "Wait takes a non-negative number of seconds"));
+                return Err(Invalid::at("Wait(", "Wait takes a non-negative number of seconds"));
             }
         }
         for (name, v) in
@@ -417,7 +449,9 @@ impl LoadedScenario {
     /// Resolves an already parsed scenario (robot paths relative to the working directory).
     pub fn from_scenario(scenario: Scenario) -> Result<LoadedScenario, ScenarioError> {
         let label = format!("<scenario {}>", scenario.name);
-        Self::resolve(scenario, Path::new("."), None, "", &label)
+        let text =
+            ron::ser::to_string_pretty(&scenario, ron::ser::PrettyConfig::default()).unwrap_or_default();
+        Self::resolve(scenario, Path::new("."), None, &text, &label)
     }
 
     fn resolve(
@@ -442,22 +476,61 @@ impl LoadedScenario {
                 })?
             }
         };
+        let at = |key: &str, message: String| {
+            let (line, column) = locate(text, key);
+            ScenarioError { file: label.to_string(), line, column, message }
+        };
         apply_noise(&mut profile, &scenario.noise);
-        let loaded = LoadedScenario { scenario, profile, path };
+        // The overrides must leave a valid robot (a negative friction would break the physics).
+        profile.validate().map_err(|e| at("noise", format!("noise overrides: {e}")))?;
+        let cell = scenario.cell_size(&profile);
+        let frame = crate::grid::GridFrame::for_room(&scenario.room, cell);
+        let (width, height) = crate::grid::room_extent(&scenario.room);
+        let max = crate::grid::MAX_CELLS as f32 * cell;
+        if width > max || height > max {
+            return Err(at(
+                "room",
+                format!(
+                    "room is {width:.2} m x {height:.2} m: at most {} cells of {cell} m a side fit the link protocol's one-byte coordinates",
+                    crate::grid::MAX_CELLS
+                ),
+            ));
+        }
+        if frame.rows == 0 || frame.cols == 0 {
+            return Err(at("room", format!("room is smaller than one {cell} m cell")));
+        }
+        let on_grid = |(row, col): (u8, u8)| usize::from(row) < frame.rows && usize::from(col) < frame.cols;
+        for step in &scenario.mission {
+            if let Step::GoTo(row, col) = *step
+                && !on_grid((row, col))
+            {
+                return Err(at(
+                    "GoTo(",
+                    format!("GoTo({row}, {col}) is off the {}x{} grid", frame.rows, frame.cols),
+                ));
+            }
+        }
+        if let Some(reached) = scenario.expect.reached
+            && !on_grid(reached)
+        {
+            return Err(at(
+                "reached",
+                format!("reached {reached:?} is off the {}x{} grid", frame.rows, frame.cols),
+            ));
+        }
+        let loaded =
+            LoadedScenario { scenario, profile, path, text: text.to_string(), label: label.to_string() };
         // The start cell must be on the grid and free, or nothing can run.
         let grid = crate::grid::TruthGrid::build(&loaded.scenario, &loaded.profile);
         let start = loaded.scenario.start;
         if !grid.is_free(start.row as usize, start.col as usize) {
-            let (line, column) = locate(text, "start");
-            return Err(ScenarioError {
-                file: label.to_string(),
-                line,
-                column,
-                message: format!(
+            return Err(at(
+                "start",
+                format!(
                     "start cell ({}, {}) is not a free cell of the {}x{} grid",
                     start.row, start.col, grid.rows, grid.cols
                 ),
-            });
+            ));
         }
         Ok(loaded)
     }
@@ -489,12 +562,29 @@ impl Invalid {
     }
 }
 
-/// Line and column (1-based) of the first occurrence of `needle` as a word, else 1:1.
-fn locate(text: &str, needle: &str) -> (usize, usize) {
+/// Line and column (1-based) of the first place `key` is used as a field (`key:`) or, for a
+/// key ending in `(`, as a call — outside string literals and comments, at a word boundary. 1:1
+/// when it is not there.
+fn locate(text: &str, key: &str) -> (usize, usize) {
     for (i, line) in text.lines().enumerate() {
-        let code = line.split("//").next().unwrap_or("");
-        if let Some(col) = code.find(needle) {
-            return (i + 1, col + 1);
+        let bytes = line.as_bytes();
+        let mut in_string = false;
+        let mut j = 0;
+        while j < bytes.len() {
+            match bytes[j] {
+                b'\\' if in_string => j += 1,
+                b'"' => in_string = !in_string,
+                b'/' if !in_string && bytes.get(j + 1) == Some(&b'/') => break,
+                _ if !in_string && line.get(j..).is_some_and(|rest| rest.starts_with(key)) => {
+                    let before_ok = j == 0 || !(bytes[j - 1].is_ascii_alphanumeric() || bytes[j - 1] == b'_');
+                    let rest = line.get(j + key.len()..).unwrap_or("").trim_start();
+                    if before_ok && (key.ends_with('(') || rest.starts_with(':')) {
+                        return (i + 1, j + 1);
+                    }
+                }
+                _ => {}
+            }
+            j += 1;
         }
     }
     (1, 1)
@@ -549,6 +639,42 @@ mod tests {
         let err = Scenario::from_ron_str(text, "x.ron").unwrap_err();
         assert_eq!(err.line, 3, "{err}");
         assert!(err.message.contains("no area"), "{err}");
+    }
+
+    fn rejects(body: &str) -> ScenarioError {
+        let text = format!(
+            "Scenario(\n  name: \"x\",\n  description: \"a room: start here\",\n  room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],\n  start: (row: 0, col: 0, heading: East),\n{body}\n)"
+        );
+        LoadedScenario::from_ron_str(&text, "x.ron", Path::new(".")).unwrap_err()
+    }
+
+    #[test]
+    fn bad_values_are_rejected_where_they_are_written() {
+        // Line 6 is the first line of `body`; the description mentioning "start" and "room" is
+        // not mistaken for the fields.
+        let e = rejects("  noise: (friction: Some(-0.1)),");
+        assert_eq!((e.line, e.column), (6, 3), "{e}");
+        assert!(e.message.contains("friction"), "{e}");
+        let e = rejects("  obstacles: [Polygon(points: [(0.1, 0.1), (0.2, 0.2), (0.3, 0.3)])],");
+        assert_eq!(e.line, 6, "{e}");
+        assert!(e.message.contains("obstacle 0"), "{e}");
+        let e = rejects("  obstacles: [Circle(center: (0.5, 0.5), radius: inf)],");
+        assert_eq!(e.line, 6, "{e}");
+        let e = rejects("  mission: [StartCartography,\n    GoTo(5, 0)],");
+        assert_eq!((e.line, e.column), (7, 5), "{e}");
+        let e = rejects("  faults: [GuiDisconnect(at_s: -1.0)],");
+        assert_eq!(e.line, 6, "{e}");
+        let e = rejects("  expect: (reached: Some((9, 9))),");
+        assert_eq!(e.line, 6, "{e}");
+        let e = rejects("  cell: Some(0.001),");
+        assert_eq!(e.line, 6, "{e}");
+    }
+
+    #[test]
+    fn a_room_too_big_for_one_byte_coordinates_is_rejected() {
+        let text = "Scenario(name: \"big\", room: [(0.0, 0.0), (100.0, 0.0), (100.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
+        let e = LoadedScenario::from_ron_str(text, "big.ron", Path::new(".")).unwrap_err();
+        assert!(e.message.contains("256"), "{e}");
     }
 
     #[test]

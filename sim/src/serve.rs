@@ -175,9 +175,21 @@ pub fn serve(
     let clock = WallClock::start();
     let mut now = Instant::ZERO;
     let mut next_status = options.status_every.map(|d| Instant::ZERO + d);
+    // Simulated time owed to the wall clock is caught up at most this much per pass; after a
+    // longer stall (a suspended process, a too-high speed) the twin drops the backlog instead of
+    // racing through it, so it stays responsive and Ctrl-C works.
+    let max_catch_up = Duration::from_millis(50);
+    let mut offset_micros = 0.0f64;
     while !stop.load(Ordering::SeqCst) {
-        let wall = clock.now_micros() as f64 * options.speed.max(1e-6);
-        while (now + dt).total_micros() as f64 <= wall {
+        let mut wall = clock.now_micros() as f64 * options.speed.max(1e-6) - offset_micros;
+        let behind = wall - now.total_micros() as f64;
+        if behind > max_catch_up.total_micros() as f64 {
+            let dropped = behind - max_catch_up.total_micros() as f64;
+            offset_micros += dropped;
+            wall -= dropped;
+            tracing::warn!(behind_ms = behind / 1000.0, "twin fell behind the wall clock; skipping ahead");
+        }
+        while (now + dt).total_micros() as f64 <= wall && !stop.load(Ordering::SeqCst) {
             now += dt;
             let budget = WriteBudget { motor: motor_pacer.tick(dt), sensor: sensor_pacer.tick(dt) };
             let io = twin.board_io(now, &mut motor, &mut sensor, budget);

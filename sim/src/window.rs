@@ -32,14 +32,13 @@ use std::time::Duration as WallDuration;
 
 use bevy::app::{App, Plugin, Startup, Update};
 use bevy::asset::{Assets, RenderAssetUsages};
-use bevy::camera::visibility::Visibility;
 use bevy::color::Color;
 use bevy::ecs::schedule::IntoScheduleConfigs;
 use bevy::ecs::system::{Commands, Query, Res, ResMut, Single};
 use bevy::gizmos::gizmos::Gizmos;
 use bevy::image::{Image, ImageSampler};
 use bevy::math::{Quat, Rect, Vec2, Vec3};
-use bevy::prelude::{ClearColor, Component, Resource, Transform, With, Without};
+use bevy::prelude::{ClearColor, Component, Resource, Transform, Visibility, With, Without};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy::sprite::Sprite;
 use bevy::time::{Real, Time};

@@ -16,10 +16,13 @@ use robot_model::profile::RobotProfile;
 use crate::grid::{obstacle_shape, room_edges};
 use crate::scenario::Scenario;
 
-/// Separation below which the robot counts as touching something, metres. Rapier reports
-/// contact pairs from 2 cm apart (its prediction distance) and its manifold distances date from
-/// before the solver moved the bodies, so touching is decided from the true shape distance.
+/// Separation below which the robot starts touching something, metres. Rapier reports contact
+/// pairs from 2 cm apart (its prediction distance) and its manifold distances date from before
+/// the solver moved the bodies, so touching is decided from the true shape distance.
 const TOUCH: f32 = 0.001;
+/// Separation above which a touch has ended (hysteresis: sliding along a wall with the gap
+/// hovering around [`TOUCH`] is one collision, not many).
+const RELEASE: f32 = 0.005;
 
 /// A ray that hit something.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,6 +49,7 @@ pub struct SimWorld {
     robot: RigidBodyHandle,
     robot_collider: ColliderHandle,
     half_length: f32,
+    bumper_half_width: f32,
     touching: BTreeSet<(u32, u32)>,
     collisions: u32,
     front_contact: bool,
@@ -106,6 +110,7 @@ impl SimWorld {
             robot,
             robot_collider,
             half_length,
+            bumper_half_width: profile.bumper.face_width_m * 0.5,
             touching: BTreeSet::new(),
             collisions: 0,
             front_contact: false,
@@ -159,12 +164,20 @@ impl SimWorld {
                 obstacle.shape(),
             )
             .map_or(0.0, |d| d.distance);
-            if gap > TOUCH {
+            let key = other.into_raw_parts();
+            let limit = if self.touching.contains(&key) { RELEASE } else { TOUCH };
+            if gap > limit {
                 continue;
             }
-            now_touching.insert(other.into_raw_parts());
+            now_touching.insert(key);
             let robot_is_first = pair.collider1 == self.robot_collider;
-            front |= front_face_touched(pair.manifolds(), robot_is_first, self.half_length);
+            front |= gap <= TOUCH
+                && front_face_touched(
+                    pair.manifolds(),
+                    robot_is_first,
+                    self.half_length,
+                    self.bumper_half_width,
+                );
         }
         self.collisions += now_touching.difference(&self.touching).count() as u32;
         self.touching = now_touching;
@@ -254,17 +267,22 @@ impl SimWorld {
     }
 }
 
-/// Whether something touching the robot (the caller checked) presses on its front face: a
-/// contact point on the front face (corners included) whose normal, leaving the robot, points
-/// within 45° of straight ahead. A wall grazing the robot's side while it turns does not press
-/// the bumper.
-fn front_face_touched(manifolds: &[ContactManifold], robot_is_first: bool, half_length: f32) -> bool {
+/// Whether something touching the robot (the caller checked) presses on its bumper: a contact
+/// point on the front face within the bumper's width (corners included when the bumper spans the
+/// face), whose normal, leaving the robot, points within 45° of straight ahead. A wall grazing
+/// the robot's side while it turns does not press the bumper.
+fn front_face_touched(
+    manifolds: &[ContactManifold],
+    robot_is_first: bool,
+    half_length: f32,
+    bumper_half_width: f32,
+) -> bool {
     manifolds.iter().any(|m| {
         let normal = if robot_is_first { m.local_n1 } else { m.local_n2 };
         normal.x > std::f32::consts::FRAC_1_SQRT_2
             && m.points.iter().any(|p| {
                 let local = if robot_is_first { p.local_p1 } else { p.local_p2 };
-                local.x > half_length - 0.01
+                local.x > half_length - 0.01 && local.y.abs() <= bumper_half_width + 1e-3
             })
     })
 }

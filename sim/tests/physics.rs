@@ -167,3 +167,41 @@ fn trajectory_hash() -> String {
 fn same_seed_gives_an_identical_trajectory() {
     assert_eq!(trajectory_hash(), trajectory_hash());
 }
+
+#[test]
+fn facing_north_forward_moves_plus_y_strafing_left_moves_minus_x_and_the_sonar_looks_north() {
+    let p = quiet_profile();
+    let north = std::f32::consts::FRAC_PI_2;
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(0.0, 0.0, north), DT);
+    drive(&mut body, setpoints(&p, Twist { vx: 0.3, vy: 0.0, omega: 0.0 }), 1.0);
+    let pos = body.pose();
+    assert!(pos.y > 0.2 && pos.x.abs() < 0.01, "forward facing north: {pos:?}");
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(0.0, 0.0, north), DT);
+    drive(&mut body, setpoints(&p, Twist { vx: 0.0, vy: 0.3, omega: 0.0 }), 1.0);
+    let pos = body.pose();
+    assert!(pos.x < -0.2 && pos.y.abs() < 0.01, "strafe left facing north: {pos:?}");
+    // A wall 1.00 m north of the sensor.
+    let mount = p.sonar.mount_x_m;
+    let s = room(&format!("Segment(from: (-2.0, {y}), to: (2.0, {y}))", y = 1.0 + mount));
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, north), DT);
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    body.sample_sonar(Instant::ZERO, &mut rng);
+    let cm = body.sonar_cm().expect("an echo from the north wall");
+    assert!((cm - 100.0).abs() <= 1.0, "read {cm} cm");
+}
+
+#[test]
+fn scraping_a_wall_with_the_side_is_a_collision_but_not_a_bumper_press() {
+    let p = quiet_profile();
+    // Facing east with the left side 1 cm from a wall along y = 0.13, strafing left into it.
+    let s = room("Segment(from: (-2.0, 0.13), to: (2.0, 0.13))");
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let sp = setpoints(&p, Twist { vx: 0.2, vy: 0.1, omega: 0.0 });
+    let mut bumped = false;
+    for _ in 0..400 {
+        body.step(sp);
+        bumped |= body.bumper();
+    }
+    assert_eq!(body.world().collisions(), 1);
+    assert!(!bumped, "a side contact pressed the front bumper");
+}

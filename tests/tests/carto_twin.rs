@@ -151,10 +151,6 @@ impl Rig {
     }
 }
 
-fn count(r: &[GuiMessage], pred: impl Fn(&GuiMessage) -> bool) -> usize {
-    r.iter().filter(|m| pred(m)).count()
-}
-
 #[test]
 fn forward_with_the_way_clear_moves_one_cell_in_the_physics_world() {
     let mut rig = rig("");

@@ -45,3 +45,27 @@ fn decode_and_encode_round_trip_the_seed_frame() {
     let out = explobot().args(["decode", "--protocol", "sensor", "zz"]).output().unwrap();
     assert_eq!(out.status.code(), Some(2));
 }
+
+#[test]
+fn a_run_writes_its_files_and_replays_identically() {
+    let out_dir = std::env::temp_dir().join(format!("explobot-cli-run-{}", std::process::id()));
+    let out =
+        explobot().args(["run", "scenarios/empty.ron", "--quiet", "--out"]).arg(&out_dir).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("result          PASS"), "{text}");
+    let report: String = std::fs::read_to_string(out_dir.join("report.json")).unwrap();
+    assert!(report.contains("\"passed\": true"), "{report}");
+    let png = std::fs::read(out_dir.join("map.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let out = explobot().arg("replay").arg(out_dir.join("links.rec")).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("identical"), "{text}");
+    // A damaged recording is an error with the file named, not a crash.
+    std::fs::write(out_dir.join("bad.rec"), b"\x01\xff\xff\xff").unwrap();
+    let out = explobot().arg("replay").arg(out_dir.join("bad.rec")).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.rec"));
+    std::fs::remove_dir_all(&out_dir).unwrap();
+}

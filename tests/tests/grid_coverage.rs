@@ -10,16 +10,7 @@ use cute::gridsim::{FakeRobot, World};
 use cute::map::Map;
 use cute::motion::Heading;
 use sim::grid::TruthGrid;
-use sim::scenario::{self, LoadedScenario};
-
-fn heading(h: scenario::Heading) -> Heading {
-    match h {
-        scenario::Heading::South => Heading::South,
-        scenario::Heading::North => Heading::North,
-        scenario::Heading::West => Heading::West,
-        scenario::Heading::East => Heading::East,
-    }
-}
+use sim::scenario::LoadedScenario;
 
 #[test]
 fn cartography_maps_every_reachable_cell_of_every_scenario_room() {
@@ -40,8 +31,8 @@ fn cartography_maps_every_reachable_cell_of_every_scenario_room() {
         let n_reachable = reachable.iter().filter(|r| **r).count();
 
         let mut map = Map::new(rows, cols).unwrap();
-        let mut carto = Cartographer::new(rows, cols, start, heading(s.heading)).unwrap();
-        let mut robot = FakeRobot::new(world, start, heading(s.heading));
+        let mut carto = Cartographer::new(rows, cols, start, Heading::from(s.heading)).unwrap();
+        let mut robot = FakeRobot::new(world, start, Heading::from(s.heading));
         while let Some(cmd) = carto.next_command(&map) {
             let result = robot.execute(cmd);
             carto.on_result(&mut map, result);

@@ -21,7 +21,7 @@ fn a_replay_matches_the_recording_and_a_changed_byte_is_located() {
     assert_eq!(hash_logs(&recorded), hash_logs(&replayed));
     // Every link and endpoint is recorded.
     for (link, endpoint) in
-        [("motor", "carto"), ("motor", "board"), ("sensor", "carto"), ("sensor", "board"), ("gui", "cute")]
+        [("motor", "carto"), ("motor", "board"), ("sensor", "carto"), ("sensor", "board"), ("gui", "cute#1")]
     {
         assert!(
             recorded.iter().any(|l| l.link == link && l.endpoint == endpoint && !l.chunks.is_empty()),

@@ -47,7 +47,7 @@ use protocol::motor::{
 use super::{Periodic, baud_bytes_per_sec};
 use crate::kinematics::{MecanumKinematics, PercentCommand, mix_percent};
 use crate::pose::{Pose2, Twist};
-use crate::profile::{AcceptChecksumSetting, ChecksumSetting, RobotProfile, TelemetryFormSetting};
+use crate::profile::{RobotProfile, TelemetryFormSetting};
 use crate::time::{Duration, Instant};
 
 /// What the motor board has seen and done since it started.
@@ -102,17 +102,8 @@ impl MotorBoard {
     /// `serial` sections.
     pub fn new(profile: &RobotProfile) -> Self {
         let p = &profile.motor_board;
-        let policy = match p.accept_checksum {
-            AcceptChecksumSetting::Sum => ChecksumPolicy::Sum,
-            AcceptChecksumSetting::XorPayload => ChecksumPolicy::XorPayload,
-            AcceptChecksumSetting::ConstFc => ChecksumPolicy::ConstFc,
-            AcceptChecksumSetting::Ignore => ChecksumPolicy::Ignore,
-        };
-        let emit_kind = match p.checksum {
-            ChecksumSetting::Sum => ChecksumKind::Sum,
-            ChecksumSetting::XorPayload => ChecksumKind::XorPayload,
-            ChecksumSetting::ConstFc => ChecksumKind::ConstFc,
-        };
+        let policy = ChecksumPolicy::from(p.accept_checksum);
+        let emit_kind = ChecksumKind::from(p.checksum);
         let form = match p.telemetry_form {
             TelemetryFormSetting::Motor32 => TelemetryForm::Motor32,
             TelemetryFormSetting::Motor36 => TelemetryForm::Motor36,
@@ -317,6 +308,7 @@ fn axis_percent(raw: u8) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::profile::ChecksumSetting;
 
     fn v2(vx: i8, vy: i8, omega: i8) -> Vec<u8> {
         MotorPacket::Drive(MotorCommand::V2 { vx, vy, omega, speed_ratio: 6, reserved: [0; 2] }).to_bytes()
