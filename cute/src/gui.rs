@@ -60,6 +60,9 @@ use bevy::winit::{UpdateMode, WinitPlugin, WinitSettings};
 use bevy_egui::input::egui_wants_any_pointer_input;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 
+/// The egui integration this GUI is built on, for plugins that add their own panels beside it.
+pub use bevy_egui;
+
 use crate::map::CellValue;
 use crate::motion::Heading;
 use crate::session::{Compat, Cute, CuteEvent, Status};

@@ -35,13 +35,9 @@ pub struct GridFrame {
 impl GridFrame {
     /// The grid for `room` (a polygon) with cells of `cell` metres.
     pub fn for_room(room: &[(f32, f32)], cell: f32) -> GridFrame {
-        let (mut min_x, mut min_y, mut max_x, mut max_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-        for &(x, y) in room {
-            min_x = min_x.min(x);
-            max_x = max_x.max(x);
-            min_y = min_y.min(y);
-            max_y = max_y.max(y);
-        }
+        // Scenario validation rejects rooms wider than MAX_CELLS cells; the clamp below only
+        // keeps the arithmetic sane for callers that skip it.
+        let (min_x, min_y, max_x, max_y) = bounds(room);
         let width = (max_x - min_x).max(0.0);
         let height = (max_y - min_y).max(0.0);
         let cols = ((width / cell + 1e-4).floor() as usize).min(MAX_CELLS);
@@ -142,15 +138,16 @@ fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
     query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
 }
 
+/// A polygon's bounding box: (min x, min y, max x, max y), metres.
+pub fn bounds(room: &[(f32, f32)]) -> (f32, f32, f32, f32) {
+    room.iter().fold((f32::MAX, f32::MAX, f32::MIN, f32::MIN), |(a, b, c, d), &(x, y)| {
+        (a.min(x), b.min(y), c.max(x), d.max(y))
+    })
+}
+
 /// Width and height of a polygon's bounding box, metres.
 pub fn room_extent(room: &[(f32, f32)]) -> (f32, f32) {
-    let (mut min_x, mut min_y, mut max_x, mut max_y) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-    for &(x, y) in room {
-        min_x = min_x.min(x);
-        max_x = max_x.max(x);
-        min_y = min_y.min(y);
-        max_y = max_y.max(y);
-    }
+    let (min_x, min_y, max_x, max_y) = bounds(room);
     ((max_x - min_x).max(0.0), (max_y - min_y).max(0.0))
 }
 

@@ -10,7 +10,7 @@ use rapier2d::parry::math::Vector;
 use rapier2d::parry::query::PointQuery;
 use rapier2d::parry::shape::Shape;
 
-use crate::grid::{GridFrame, obstacle_shape, point_in_polygon};
+use crate::grid::{GridFrame, bounds, obstacle_shape, point_in_polygon};
 use crate::scenario::Scenario;
 
 /// Pixels per metre for rooms up to ~25 m; larger rooms are scaled down to fit [`MAX_SIDE`].
@@ -106,12 +106,6 @@ fn contains(pose: &rapier2d::parry::math::Pose, shape: &dyn Shape, x: f32, y: f3
             let p = pose.inverse_transform_point(Vector::new(x, y));
             seg.distance_to_local_point(p, true) < 0.012
         })
-}
-
-fn bounds(room: &[(f32, f32)]) -> (f32, f32, f32, f32) {
-    room.iter().fold((f32::MAX, f32::MAX, f32::MIN, f32::MIN), |(a, b, c, d), &(x, y)| {
-        (a.min(x), b.min(y), c.max(x), d.max(y))
-    })
 }
 
 fn blend(base: [u8; 3], tint: [u8; 3], alpha: f32) -> [u8; 3] {

@@ -277,4 +277,57 @@ impl Report {
         let _ = writeln!(s, "result          {}", if self.passed { "PASS" } else { "FAIL" });
         s
     }
+
+    /// A summary with no wall-clock figures: equal for equal runs on any machine (the scenario
+    /// suite snapshots it).
+    pub fn summary_text(&self) -> String {
+        let r = self;
+        let mut s = String::new();
+        let _ = writeln!(s, "scenario {} seed {}", r.scenario, r.seed);
+        let _ = writeln!(
+            s,
+            "sim time {:.2} s, mission complete {} at {:?} s",
+            r.sim_time_s,
+            r.mission_complete,
+            r.mission_time_s.map(|t| (t * 100.0).round() / 100.0)
+        );
+        let _ = writeln!(s, "mission errors {:?}", r.mission_errors);
+        let _ = writeln!(s, "moves {}, reconnects {}, collisions {}", r.moves, r.reconnects, r.collisions);
+        let _ = writeln!(
+            s,
+            "coverage {}/{}, accuracy {}/{}",
+            r.map.reachable_known_free, r.map.reachable, r.map.correct, r.map.classified
+        );
+        let _ = writeln!(s, "final cell {:?}, Cute believes {:?}", r.final_cell, r.cute_cell);
+        let _ = writeln!(
+            s,
+            "final pose x {:.2} m, y {:.2} m, heading {:.0} deg",
+            r.final_pose.0, r.final_pose.1, r.final_pose.2
+        );
+        for l in &r.links {
+            let _ = writeln!(
+                s,
+                "link {}: out {} B / {} frames / {} errors, in {} B / {} frames / {} errors",
+                l.name,
+                l.outbound.bytes,
+                l.outbound.frames,
+                l.outbound.errors,
+                l.inbound.bytes,
+                l.inbound.frames,
+                l.inbound.errors
+            );
+        }
+        let _ = writeln!(s, "faults injected {}", r.faults_injected);
+        for c in &r.checks {
+            let _ = writeln!(
+                s,
+                "check {} expected {} got {}: {}",
+                c.name,
+                c.expected,
+                c.actual,
+                if c.pass { "pass" } else { "FAIL" }
+            );
+        }
+        s
+    }
 }

@@ -37,14 +37,14 @@ use bevy::ecs::schedule::IntoScheduleConfigs;
 use bevy::ecs::system::{Commands, Query, Res, ResMut, Single};
 use bevy::gizmos::gizmos::Gizmos;
 use bevy::image::{Image, ImageSampler};
-use bevy::math::{Quat, Rect, Vec2, Vec3};
+use bevy::math::{Quat, Rect, Vec2};
 use bevy::prelude::{ClearColor, Component, Resource, Transform, Visibility, With, Without};
 use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy::sprite::Sprite;
 use bevy::time::{Real, Time};
 use bevy::window::{PrimaryWindow, Window};
-use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use cute::Cute;
+use cute::gui::bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use cute::gui::{
     AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, CuteView, TOOLBAR_HEIGHT, continuous_updates,
     logical_to_world, setup_camera, window_plugins,
@@ -604,43 +604,43 @@ fn status_bar(
         Speed::Paused => "paused".to_string(),
         s => format!("{} (achieved {:.1}x)", s.label(), pacing.achieved),
     };
-    let finished = if run.is_finished() { " — run finished" } else { "" };
-    let line1 = format!(
-        "t = {:.2} s / {:.0} s{finished} | speed {speed} | Cute: {:?}",
+    let finished = if run.is_finished() { " (run finished)" } else { "" };
+    let mut line1 = format!(
+        "t = {:.2} s / {:.0} s{finished} | {speed} | Cute: {:?}",
         run.now().as_secs_f64(),
         run.time_limit().as_secs_f64(),
         run.cute().status(),
     );
-    let line2 = cache.report.as_ref().map_or_else(String::new, |r| {
+    let mut line2 = String::new();
+    if let Some(r) = cache.report.as_ref() {
+        line1 += &format!(
+            " | coverage {:.0} % accuracy {:.0} % collisions {}",
+            r.coverage * 100.0,
+            r.map_accuracy * 100.0,
+            r.collisions
+        );
         let links: Vec<String> = r
             .links
             .iter()
             .map(|l| {
                 format!(
-                    "{} out {} {} fr {} err, in {} {} fr {} err",
+                    "{} {} {} fr / {} {} fr",
                     l.name,
                     kilo(l.outbound.bytes),
                     l.outbound.frames,
-                    l.outbound.errors,
                     kilo(l.inbound.bytes),
                     l.inbound.frames,
-                    l.inbound.errors
                 )
             })
             .collect();
-        format!(
-            "{} | coverage {:.0} % accuracy {:.0} % collisions {}",
-            links.join(" | "),
-            r.coverage * 100.0,
-            r.map_accuracy * 100.0,
-            r.collisions
-        )
-    });
+        let errors: u64 = r.links.iter().map(|l| l.outbound.errors + l.inbound.errors).sum();
+        line2 = format!("links out / in: {} | frame errors {errors}", links.join(" | "));
+    }
     egui::Area::new(egui::Id::new("twin-status"))
         .fixed_pos(egui::pos2(14.0, height - STATUS_HEIGHT + 4.0))
         .show(ctx, |ui| {
             ui.label(egui::RichText::new(line1).monospace());
-            ui.label(egui::RichText::new(line2).monospace().small());
+            ui.label(egui::RichText::new(line2).monospace());
         });
     Ok(())
 }
