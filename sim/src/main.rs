@@ -349,12 +349,26 @@ fn sim_serve(
     let on_signal = stop.clone();
     ctrlc::set_handler(move || on_signal.store(true, Ordering::SeqCst))
         .context("installing the Ctrl-C handler")?;
-    serve(&loaded, seed, &options, &stop, |motor, sensor| {
+    let clock = transport::WallClock::start();
+    let ready = |motor: &str, sensor: &str| {
         println!("twin of '{}' serving at {speed}x real time", loaded.scenario.name);
         println!("motor board  {motor}");
         println!("sensor board {sensor}");
         println!("start Carto with: carto --transport {}", if tcp.is_some() { "tcp" } else { "sim" });
-    })?;
+    };
+    let status = |now: robot_model::time::Instant, twin: &sim::twin::Twin| {
+        let p = twin.body().pose();
+        let cell = twin.cell().map_or("off grid".to_string(), |(r, c)| format!("({r}, {c})"));
+        println!(
+            "t={:>8.2}s  x={:.3} y={:.3} heading={:6.1}deg  cell {cell}  wheels {:?} rpm",
+            now.as_secs_f64(),
+            p.x,
+            p.y,
+            p.theta.to_degrees(),
+            twin.motor_board().wheel_setpoints_rpm().map(|v| v.round())
+        );
+    };
+    serve(&loaded, seed, &options, &clock, &stop, ready, status)?;
     println!("twin stopped");
     Ok(ExitCode::SUCCESS)
 }

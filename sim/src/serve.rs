@@ -10,11 +10,11 @@
 //! exceeds 9600 baud shows up as growing latency, as on the robot.
 
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use robot_model::time::{Duration, Instant};
-use transport::{Clock, Error, Link, Listener, PtyLink, TcpLink, TcpListenerLink, WallClock};
+use transport::{Clock, Error, Link, Listener, PtyLink, TcpLink, TcpListenerLink};
 
 use crate::scenario::LoadedScenario;
 use crate::twin::{Twin, WriteBudget};
@@ -156,14 +156,17 @@ pub fn open_ports(ports: &Ports) -> Result<(BoardPort, BoardPort), Error> {
     })
 }
 
-/// Runs the twin in real time until `stop` is set or the duration is over. `ready` is called
-/// once with the port descriptions (motor, sensor) when they are open.
+/// Runs the twin in real time, paced by `clock`, until `stop` is set or the duration is over.
+/// `ready` is called once with the port descriptions (motor, sensor) when they are open;
+/// `status` every `status_every` of simulated time.
 pub fn serve(
     loaded: &LoadedScenario,
     seed: Option<u64>,
     options: &ServeOptions,
+    clock: &impl Clock,
     stop: &AtomicBool,
     ready: impl FnOnce(&str, &str),
+    mut status: impl FnMut(Instant, &Twin),
 ) -> Result<(), Error> {
     let seed = seed.unwrap_or(loaded.scenario.seed);
     let dt = Duration::from_secs_f64(f64::from(loaded.scenario.physics.step_ms) / 1000.0);
@@ -172,7 +175,6 @@ pub fn serve(
     ready(&motor.describe(), &sensor.describe());
     let mut motor_pacer = Pacer::new(loaded.profile.serial.motor_baud);
     let mut sensor_pacer = Pacer::new(loaded.profile.serial.sensor_baud);
-    let clock = WallClock::start();
     let mut now = Instant::ZERO;
     let mut next_status = options.status_every.map(|d| Instant::ZERO + d);
     // Simulated time owed to the wall clock is caught up at most this much per pass; after a
@@ -199,16 +201,7 @@ pub fn serve(
             if let Some(at) = next_status
                 && now >= at
             {
-                let p = twin.body().pose();
-                let cell = twin.cell().map_or("off grid".to_string(), |(r, c)| format!("({r}, {c})"));
-                println!(
-                    "t={:>8.2}s  x={:.3} y={:.3} heading={:6.1}deg  cell {cell}  wheels {:?} rpm",
-                    now.as_secs_f64(),
-                    p.x,
-                    p.y,
-                    p.theta.to_degrees(),
-                    twin.motor_board().wheel_setpoints_rpm().map(|v| v.round())
-                );
+                status(now, &twin);
                 next_status = options.status_every.map(|d| at + d);
             }
         }
@@ -218,9 +211,4 @@ pub fn serve(
         std::thread::sleep(std::time::Duration::from_millis(1));
     }
     Ok(())
-}
-
-/// The default folder for the pty symlinks.
-pub fn default_run_dir() -> &'static Path {
-    Path::new("run")
 }
