@@ -764,6 +764,68 @@ mod tests {
         assert_eq!(s.log.back().map(String::as_str), Some("reached (19, 0)"));
     }
 
+    /// A session whose map is known free except an obstacle at (1, 1), connected and ready.
+    fn ready_session() -> Cute {
+        use protocol::link::{GuiMessage, MsgOrder};
+        let mut cute =
+            Cute::new(crate::session::CuteConfig { rows: 3, cols: 4, ..Default::default() }).unwrap();
+        cute.on_connected(robot_model::time::Instant::ZERO);
+        let mut bytes = GuiMessage::RobotPositionReceived.to_bytes(MsgOrder::BigEndian);
+        // Unsolicited positions and obstacles are mirrored on the map.
+        for (x, y) in [(0, 1), (0, 2), (0, 3), (1, 3), (2, 3), (2, 2), (2, 1), (2, 0), (1, 0), (0, 0)] {
+            bytes.extend(GuiMessage::SetRobotPosition { x, y }.to_bytes(MsgOrder::BigEndian));
+        }
+        bytes.extend(GuiMessage::SetObstaclePosition { x: 1, y: 1 }.to_bytes(MsgOrder::BigEndian));
+        cute.on_bytes(robot_model::time::Instant::from_millis(1), &bytes);
+        cute.take_outgoing();
+        cute.take_events();
+        assert!(cute.is_ready());
+        cute
+    }
+
+    /// Runs `click_to_go` once with a left click at the centre of `cell` in a 400 x 300 window.
+    fn click(cute: Cute, cell: (usize, usize)) -> (Cute, CuteUiState) {
+        let mut app = App::new();
+        let mut window = Window { resolution: WindowResolution::new(400, 300), ..Window::default() };
+        let layout = MapLayout::compute(Vec2::new(400.0, 300.0), &CuteView::default(), 3, 4);
+        window.set_cursor_position(Some(layout.cell_rect(cell.0, cell.1).center()));
+        app.world_mut().spawn((window, PrimaryWindow));
+        let mut buttons = ButtonInput::<MouseButton>::default();
+        buttons.press(MouseButton::Left);
+        app.insert_resource(buttons)
+            .insert_resource(CuteView::default())
+            .insert_resource(CuteSession(cute))
+            .init_resource::<CuteUiState>()
+            .add_systems(Update, click_to_go::<CuteSession>);
+        app.update();
+        let ui = app.world().resource::<CuteUiState>().clone();
+        let cute = app.world_mut().remove_resource::<CuteSession>().unwrap().0;
+        (cute, ui)
+    }
+
+    #[test]
+    fn click_on_a_free_cell_sends_the_robot_there() {
+        let (mut cute, ui) = click(ready_session(), (2, 3));
+        assert_eq!(cute.status(), Status::Moving);
+        assert_eq!(cute.map().destination(), Some((2, 3)));
+        assert_eq!(ui.notice.as_deref(), Some("going to (2, 3)"));
+        // Only SEND_MOVES_TRAJECTORY frames went out.
+        let frames = protocol::link::Decoder::default().feed(&cute.take_outgoing());
+        assert!(!frames.is_empty());
+        for f in frames {
+            assert!(matches!(f, Ok(protocol::link::GuiMessage::SendMovesTrajectory { .. })), "{f:?}");
+        }
+    }
+
+    #[test]
+    fn click_on_an_obstacle_explains_and_does_not_move() {
+        let (mut cute, ui) = click(ready_session(), (1, 1));
+        assert_eq!(cute.status(), Status::Idle);
+        assert!(cute.take_outgoing().is_empty());
+        let notice = ui.notice.unwrap_or_default();
+        assert!(notice.starts_with("cannot go to (1, 1)"), "{notice}");
+    }
+
     #[test]
     fn status_text_names_link_mission_and_counts() {
         let cute = Cute::new(crate::session::CuteConfig { rows: 3, cols: 4, ..Default::default() }).unwrap();

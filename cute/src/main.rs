@@ -46,6 +46,9 @@ struct Cli {
     /// The robot's starting heading: north, south, east or west.
     #[arg(long, default_value = "east")]
     heading: String,
+    /// Start cartography as soon as Carto acknowledges the position (demos, screenshots).
+    #[arg(long)]
+    cartography: bool,
     /// Save a PNG of the window after `--screenshot-after` seconds, then exit.
     #[arg(long, value_name = "FILE")]
     screenshot: Option<PathBuf>,
@@ -63,6 +66,7 @@ struct Remote {
     clock: WallClock,
     unsent: Vec<u8>,
     last_error: Option<String>,
+    start_cartography: bool,
 }
 
 impl CuteAccess for Remote {
@@ -128,6 +132,12 @@ impl Remote {
         }
         if !alive || self.cute.close_requested() {
             self.drop_link(now);
+        }
+        if self.start_cartography && self.cute.is_ready() {
+            self.start_cartography = false;
+            if let Err(e) = self.cute.start_cartography() {
+                tracing::warn!("cannot start cartography: {e}");
+            }
         }
         self.cute.poll(now);
         let out = self.cute.take_outgoing();
@@ -195,6 +205,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         clock: WallClock::start(),
         unsent: Vec::new(),
         last_error: None,
+        start_cartography: cli.cartography,
     };
     let mut app = App::new();
     app.add_plugins(window_plugins(&format!("Cute — {}", cli.connect), 1024, 768, false))

@@ -220,7 +220,8 @@ fn window_cmd(scenario: Option<&Path>, seed: Option<u64>, shot: ScreenshotArgs) 
 }
 
 #[cfg(not(feature = "window"))]
-fn window_cmd(_scenario: Option<&Path>, _seed: Option<u64>, _shot: ScreenshotArgs) -> Result<ExitCode> {
+fn window_cmd(_scenario: Option<&Path>, _seed: Option<u64>, shot: ScreenshotArgs) -> Result<ExitCode> {
+    let _ = (shot.screenshot, shot.screenshot_after);
     bail!(
         "this explobot was built without the window; rebuild with `cargo build --release -p sim --features window`"
     )

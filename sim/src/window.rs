@@ -299,7 +299,7 @@ pub fn pace_lockstep(mut sim: ResMut<Sim>, mut pacing: ResMut<Pacing>, time: Res
             break;
         }
         done += 1;
-        if done % 8 == 0 && started.elapsed() >= FRAME_BUDGET {
+        if done.is_multiple_of(8) && started.elapsed() >= FRAME_BUDGET {
             break;
         }
     }
@@ -592,8 +592,9 @@ fn status_bar(
     };
     let run = &sim.0;
     let wall = time.elapsed_secs_f64();
-    if cache.report.is_none() || (wall - cache.made_at_s >= REPORT_EVERY_S && cache.sim_at != Some(run.now()))
-    {
+    // Paused, the report catches up at once (a screenshot shows the figures of its instant).
+    let stale = wall - cache.made_at_s >= REPORT_EVERY_S || pacing.speed == Speed::Paused;
+    if cache.report.is_none() || (stale && cache.sim_at != Some(run.now())) {
         cache.report = Some(run.report(wall));
         cache.made_at_s = wall;
         cache.sim_at = Some(run.now());
@@ -639,6 +640,8 @@ fn status_bar(
     egui::Area::new(egui::Id::new("twin-status"))
         .fixed_pos(egui::pos2(14.0, height - STATUS_HEIGHT + 4.0))
         .show(ctx, |ui| {
+            ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Truncate);
+            ui.set_max_width(window_size(window).x - 28.0);
             ui.label(egui::RichText::new(line1).monospace());
             ui.label(egui::RichText::new(line2).monospace());
         });
