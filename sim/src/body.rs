@@ -171,9 +171,4 @@ impl RobotBody {
     pub fn pose(&self) -> Pose2 {
         self.world.robot_pose()
     }
-
-    /// Wheel slip speeds of the last step, m/s.
-    pub fn slip(&self) -> [f32; 4] {
-        self.drive.last_slip()
-    }
 }

@@ -56,7 +56,6 @@ pub struct DriveTrain {
     max_force: f32,
     slip_gain: f32,
     roller_damping: f32,
-    last_slip: [f32; 4],
 }
 
 impl DriveTrain {
@@ -84,7 +83,6 @@ impl DriveTrain {
             max_force: profile.wheels.friction_mu * mass * GRAVITY / 4.0,
             slip_gain: (0.5 * (mass / 4.0) / dt).min(1.0 / (dt * lambda_max)),
             roller_damping: ROLLER_DAMPING,
-            last_slip: [0.0; 4],
         }
     }
 
@@ -101,7 +99,6 @@ impl DriveTrain {
             let along = vbx * w.ax + vby * w.ay;
             let across = -vbx * w.ay + vby * w.ax;
             let slip = along - self.radius * omega[i] * w.cos_alpha;
-            self.last_slip[i] = slip;
             let f_along = (-self.slip_gain * slip).clamp(-self.max_force, self.max_force);
             let f_across = -self.roller_damping * across;
             // Back to body, then world frame.
@@ -111,10 +108,5 @@ impl DriveTrain {
             let fy = sin * fbx + cos * fby;
             world.add_robot_force(w.x, w.y, fx, fy);
         }
-    }
-
-    /// Slip speed of each wheel in the last step, m/s (0 = perfect grip).
-    pub fn last_slip(&self) -> [f32; 4] {
-        self.last_slip
     }
 }

@@ -345,12 +345,6 @@ impl Lockstep {
         self.now >= self.end || self.settled_at.is_some_and(|t| self.now >= t)
     }
 
-    /// Moves every recorded byte into the link logs now (the runner does it every
-    /// [`TRACE_EVERY`] steps and at the end of the run).
-    pub fn flush_traces(&mut self) {
-        self.collect_traces();
-    }
-
     fn collect_traces(&mut self) {
         // Each connection Cute makes is its own endpoint log: `cute#1`, `cute#2`, …
         let cute_traces = self
@@ -389,7 +383,7 @@ impl Lockstep {
     }
 
     /// Every byte moved on every link, per endpoint: complete once the run is finished, else as of
-    /// the last [`Lockstep::flush_traces`].
+    /// the last collection (every [`TRACE_EVERY`] steps).
     pub fn link_logs(&self) -> &[EndpointLog] {
         &self.logs
     }

@@ -46,17 +46,6 @@ impl Heading {
             Heading::South => -FRAC_PI_2,
         }
     }
-
-    /// The link protocol's direction for this heading.
-    pub fn to_direction(self) -> protocol::link::Direction {
-        use protocol::link::Direction;
-        match self {
-            Heading::South => Direction::South,
-            Heading::North => Direction::North,
-            Heading::West => Direction::West,
-            Heading::East => Direction::East,
-        }
-    }
 }
 
 impl From<Heading> for cute::Heading {

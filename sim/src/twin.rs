@@ -23,8 +23,6 @@ const TRAIL_EVERY: u64 = 20;
 #[derive(Debug, Default)]
 pub struct Outbox {
     pending: Vec<u8>,
-    /// Bytes thrown away because the link was gone.
-    pub dropped: u64,
 }
 
 impl Outbox {
@@ -43,21 +41,10 @@ impl Outbox {
             }
             Err(_) => {
                 // A board talking into an unplugged cable: the bytes are lost, as on the robot.
-                self.dropped += self.pending.len() as u64;
                 self.pending.clear();
                 0
             }
         }
-    }
-
-    /// Bytes still waiting.
-    pub fn len(&self) -> usize {
-        self.pending.len()
-    }
-
-    /// Whether nothing is waiting.
-    pub fn is_empty(&self) -> bool {
-        self.pending.is_empty()
     }
 }
 
@@ -202,10 +189,5 @@ impl Twin {
     pub fn cell(&self) -> Option<(usize, usize)> {
         let p = self.body.pose();
         self.frame.cell_at(p.x, p.y)
-    }
-
-    /// Physics steps taken.
-    pub fn steps(&self) -> u64 {
-        self.steps
     }
 }

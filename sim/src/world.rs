@@ -199,14 +199,6 @@ impl SimWorld {
         }
     }
 
-    /// The robot's velocity: world linear (m/s) and angular (rad/s, counter-clockwise).
-    pub fn robot_velocity(&self) -> (f32, f32, f32) {
-        match self.robot_body() {
-            Some(b) => (b.linvel().x, b.linvel().y, b.angvel()),
-            None => (0.0, 0.0, 0.0),
-        }
-    }
-
     /// Velocity (world frame) of the robot's material point at body-frame offset (bx, by).
     pub fn robot_point_velocity(&self, bx: f32, by: f32) -> (f32, f32) {
         match self.robot_body() {
