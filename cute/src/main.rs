@@ -113,19 +113,11 @@ impl Remote {
         }
         let mut incoming = Vec::new();
         let mut alive = true;
-        if let Some(link) = self.link.as_mut() {
-            let mut buf = [0u8; 4096];
-            loop {
-                match link.read(&mut buf) {
-                    Ok(0) => break,
-                    Ok(n) => incoming.extend_from_slice(&buf[..n]),
-                    Err(e) => {
-                        tracing::warn!("{e}");
-                        alive = false;
-                        break;
-                    }
-                }
-            }
+        if let Some(link) = self.link.as_mut()
+            && let Err(e) = link.read_available(&mut incoming)
+        {
+            tracing::warn!("{e}");
+            alive = false;
         }
         if !incoming.is_empty() {
             self.cute.on_bytes(now, &incoming);

@@ -28,31 +28,63 @@ pub enum SonarLoad {
     EveryStep,
 }
 
-/// One physics benchmark result.
+/// One physics benchmark result: the same run repeated `rounds` times.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PhysicsFigure {
     /// Sonar variant.
     pub sonar: SonarLoad,
-    /// Steps simulated.
+    /// Steps simulated per round.
     pub steps: u64,
-    /// Wall-clock seconds.
-    pub wall_s: f64,
+    /// Wall-clock seconds of each round.
+    pub wall_s: Vec<f64>,
+    /// Collisions (contact starts) in one round: the pattern should keep the robot clear of the
+    /// walls, as Carto does, so that the figure is not dominated by the contact solver.
+    pub collisions: u32,
 }
 
 impl PhysicsFigure {
-    /// Physics steps per wall-clock second.
-    pub fn steps_per_s(&self) -> f64 {
-        self.steps as f64 / self.wall_s.max(1e-9)
+    /// Physics steps per wall-clock second in the median round.
+    pub fn median_steps_per_s(&self) -> f64 {
+        let mut rates: Vec<f64> = self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9)).collect();
+        rates.sort_by(f64::total_cmp);
+        rates.get(rates.len() / 2).copied().unwrap_or(0.0)
     }
 
-    /// Simulated seconds per wall-clock second at step `dt`.
+    /// Physics steps per wall-clock second in the fastest round (the least disturbed by other
+    /// work on the machine).
+    pub fn best_steps_per_s(&self) -> f64 {
+        self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9)).fold(0.0, f64::max)
+    }
+
+    /// Simulated seconds per wall-clock second at step `dt`, median round.
     pub fn real_time_factor(&self, dt: Duration) -> f64 {
-        self.steps_per_s() * dt.as_secs_f64()
+        self.median_steps_per_s() * dt.as_secs_f64()
     }
 }
 
-/// Runs `steps` physics steps of the scenario's robot in its room.
-pub fn physics(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> PhysicsFigure {
+/// Every sonar variant, `rounds` times each, interleaved (off, per cycle, every step, off, …) so
+/// that a burst of other work on the machine does not land on one variant only.
+pub fn physics(loaded: &LoadedScenario, steps: u64, rounds: usize) -> Vec<PhysicsFigure> {
+    let variants = [SonarLoad::Off, SonarLoad::PerCycle, SonarLoad::EveryStep];
+    let mut figures: Vec<PhysicsFigure> = variants
+        .iter()
+        .map(|&sonar| PhysicsFigure { sonar, steps, wall_s: Vec::new(), collisions: 0 })
+        .collect();
+    for _ in 0..rounds.max(1) {
+        for figure in &mut figures {
+            let (wall_s, collisions) = physics_round(loaded, steps, figure.sonar);
+            figure.wall_s.push(wall_s);
+            figure.collisions = collisions;
+        }
+    }
+    figures
+}
+
+/// Drives the scenario's robot for `steps` physics steps from its start cell; returns the
+/// wall-clock seconds and the collisions. The pattern (forward and back, spin left and right,
+/// strafe left and right, 1 s each) returns to its start but for wheel slip, so the robot stays
+/// near its start cell.
+fn physics_round(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> (f64, u32) {
     let scenario = &loaded.scenario;
     let profile = &loaded.profile;
     let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
@@ -62,16 +94,18 @@ pub fn physics(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> Physics
     let kin = MecanumKinematics::from_profile(profile);
     let pattern = [
         Twist { vx: 0.3, vy: 0.0, omega: 0.0 },
+        Twist { vx: -0.3, vy: 0.0, omega: 0.0 },
         Twist { vx: 0.0, vy: 0.0, omega: 1.5 },
+        Twist { vx: 0.0, vy: 0.0, omega: -1.5 },
         Twist { vx: 0.0, vy: 0.2, omega: 0.0 },
-        Twist { vx: -0.3, vy: 0.0, omega: -1.5 },
+        Twist { vx: 0.0, vy: -0.2, omega: 0.0 },
     ];
+    let setpoints: Vec<[f32; 4]> = pattern.iter().map(|t| kin.inverse(*t).map(rad_s_to_rpm)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed);
     let start = WallInstant::now();
     let mut now = Instant::ZERO;
     for i in 0..steps {
-        let twist = pattern[((i / 200) % 4) as usize];
-        body.step(kin.inverse(twist).map(rad_s_to_rpm));
+        body.step(setpoints[((i / 200) % 6) as usize]);
         now += dt;
         match sonar {
             SonarLoad::Off => {}
@@ -83,5 +117,5 @@ pub fn physics(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> Physics
             }
         }
     }
-    PhysicsFigure { sonar, steps, wall_s: start.elapsed().as_secs_f64() }
+    (start.elapsed().as_secs_f64(), body.world().collisions())
 }

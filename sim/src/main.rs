@@ -124,9 +124,12 @@ enum Command {
     Bench {
         /// Scenarios (default: the built-in default room).
         scenarios: Vec<PathBuf>,
-        /// Physics steps per physics measurement.
-        #[arg(long, default_value_t = 200_000)]
+        /// Physics steps per round of a physics measurement.
+        #[arg(long, default_value_t = 100_000)]
         steps: u64,
+        /// Rounds per physics measurement (the median and the best round are printed).
+        #[arg(long, default_value_t = 5)]
+        rounds: usize,
         /// Only the physics figures.
         #[arg(long)]
         physics_only: bool,
@@ -190,7 +193,9 @@ fn main() -> ExitCode {
             })
         }
         Command::Replay { recording } => replay(&recording),
-        Command::Bench { scenarios, steps, physics_only } => bench_cmd(&scenarios, steps, physics_only),
+        Command::Bench { scenarios, steps, rounds, physics_only } => {
+            bench_cmd(&scenarios, steps, rounds, physics_only)
+        }
         Command::Check { scenarios } => check(&scenarios),
     };
     match result {
@@ -397,28 +402,32 @@ fn replay(path: &Path) -> Result<ExitCode> {
     }
 }
 
-fn bench_cmd(scenarios: &[PathBuf], steps: u64, physics_only: bool) -> Result<ExitCode> {
+fn bench_cmd(scenarios: &[PathBuf], steps: u64, rounds: usize, physics_only: bool) -> Result<ExitCode> {
     let list: Vec<Option<&Path>> =
         if scenarios.is_empty() { vec![None] } else { scenarios.iter().map(|p| Some(p.as_path())).collect() };
-    println!("physics: {steps} steps of the robot in each room, one thread");
-    println!("{:<20} {:<12} {:>14} {:>14}", "scenario", "sonar", "steps/s", "x real time");
+    println!("physics: {steps} steps of the robot in each room, {rounds} rounds per variant, one thread");
+    println!(
+        "{:<20} {:<12} {:>16} {:>14} {:>12} {:>11}",
+        "scenario", "sonar", "median steps/s", "best steps/s", "x real time", "collisions"
+    );
     for s in &list {
         let loaded = load(*s)?;
         let dt =
             robot_model::time::Duration::from_secs_f64(f64::from(loaded.scenario.physics.step_ms) / 1000.0);
-        for sonar in [SonarLoad::Off, SonarLoad::PerCycle, SonarLoad::EveryStep] {
-            let f = bench::physics(&loaded, steps, sonar);
-            let label = match sonar {
+        for f in bench::physics(&loaded, steps, rounds) {
+            let label = match f.sonar {
                 SonarLoad::Off => "off",
                 SonarLoad::PerCycle => "60 ms cycle",
                 SonarLoad::EveryStep => "every step",
             };
             println!(
-                "{:<20} {:<12} {:>14.0} {:>14.0}",
+                "{:<20} {:<12} {:>16.0} {:>14.0} {:>12.0} {:>11}",
                 loaded.scenario.name,
                 label,
-                f.steps_per_s(),
-                f.real_time_factor(dt)
+                f.median_steps_per_s(),
+                f.best_steps_per_s(),
+                f.real_time_factor(dt),
+                f.collisions
             );
         }
     }

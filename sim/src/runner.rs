@@ -29,7 +29,7 @@ use crate::grid::{GridFrame, TruthGrid};
 use crate::record::{Chunk, Dir, EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario, Step};
-use crate::twin::{Twin, WriteBudget, read_all};
+use crate::twin::{Twin, WriteBudget};
 
 /// Cute's end of the Cute ⇄ Carto link.
 type CuteEnd = Tracer<FaultInjector<MemLink>>;
@@ -136,7 +136,7 @@ impl CuteSide {
             }
         }
         let mut incoming = Vec::new();
-        let alive = self.link.as_mut().is_none_or(|l| read_all(l, &mut incoming));
+        let alive = self.link.as_mut().is_none_or(|l| l.read_available(&mut incoming).is_ok());
         if !incoming.is_empty() {
             self.cute.on_bytes(now, &incoming);
         }

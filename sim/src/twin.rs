@@ -48,18 +48,6 @@ impl Outbox {
     }
 }
 
-/// Reads everything a link has now into `buf`; `false` when the link reported an error.
-pub fn read_all<L: Link>(link: &mut L, buf: &mut Vec<u8>) -> bool {
-    let mut chunk = [0u8; 512];
-    loop {
-        match link.read(&mut chunk) {
-            Ok(0) => return true,
-            Ok(n) => buf.extend_from_slice(&chunk[..n]),
-            Err(_) => return false,
-        }
-    }
-}
-
 /// Per-instant limits on what each board may write (bytes), for links without byte timing.
 #[derive(Debug, Clone, Copy)]
 pub struct WriteBudget {
@@ -129,7 +117,7 @@ impl Twin {
         budget: WriteBudget,
     ) -> BoardIo {
         let mut rx = Vec::new();
-        let motor_up = read_all(motor, &mut rx);
+        let motor_up = motor.read_available(&mut rx).is_ok();
         if !rx.is_empty() {
             self.motor_board.receive(now, &rx);
         }
@@ -137,7 +125,7 @@ impl Twin {
         let motor_sent = self.motor_out.send(telemetry, motor, budget.motor);
 
         rx.clear();
-        let sensor_up = read_all(sensor, &mut rx);
+        let sensor_up = sensor.read_available(&mut rx).is_ok();
         if !rx.is_empty() {
             self.sensor_board.receive(now, &rx);
         }

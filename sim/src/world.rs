@@ -4,11 +4,19 @@
 //! hooks and events. Bevy is not needed to use it. The world is top-down: no gravity; the floor's
 //! grip is modelled per wheel by [`crate::drive`], which pushes on the body each step.
 //!
+//! The sonar's rays are cast against a [`Compound`] of the room's walls and obstacles, built once:
+//! they never move and the robot is transparent to its own sonar, so no per-leaf filter is
+//! needed. A 5-ray measurement costs ~0.9 µs this way against ~1.1 µs through the broad phase's
+//! tree (`explobot bench`, furnished room); the hits are the same (the scenario snapshots did not
+//! change).
+//!
 //! Collisions are counted as *contact starts*: each time the robot begins touching a wall or an
 //! obstacle it was not touching in the previous step, the count goes up by one.
 
 use std::collections::BTreeSet;
 
+use rapier2d::parry::query::RayCast;
+use rapier2d::parry::shape::Compound;
 use rapier2d::prelude::*;
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
@@ -46,6 +54,8 @@ pub struct SimWorld {
     ccd: CCDSolver,
     pipeline: PhysicsPipeline,
     params: IntegrationParameters,
+    /// Walls and obstacles for the sonar's rays (`None` only for a room without any shape).
+    fixed_scene: Option<Compound>,
     robot: RigidBodyHandle,
     robot_collider: ColliderHandle,
     half_length: f32,
@@ -61,21 +71,20 @@ impl SimWorld {
         let mut bodies = RigidBodySet::new();
         let mut colliders = ColliderSet::new();
         let ground = bodies.insert(RigidBodyBuilder::fixed());
-        for wall in room_edges(&scenario.room) {
-            colliders.insert_with_parent(
-                ColliderBuilder::segment(wall.a, wall.b).friction(0.3),
-                ground,
-                &mut bodies,
-            );
+        let walls = room_edges(&scenario.room).map(|wall| (Pose::IDENTITY, SharedShape::new(wall)));
+        let obstacles = scenario
+            .obstacles
+            .iter()
+            .filter_map(obstacle_shape)
+            .map(|(pose, shape)| (pose, SharedShape(std::sync::Arc::from(shape))));
+        let fixed_shapes: Vec<(Pose, SharedShape)> = walls.chain(obstacles).collect();
+        for (pose, shape) in &fixed_shapes {
+            let collider = ColliderBuilder::new(shape.clone()).position(*pose).friction(0.3);
+            colliders.insert_with_parent(collider, ground, &mut bodies);
         }
-        for obstacle in &scenario.obstacles {
-            if let Some((pose, shape)) = obstacle_shape(obstacle) {
-                let collider = ColliderBuilder::new(SharedShape(std::sync::Arc::from(shape)))
-                    .position(pose)
-                    .friction(0.3);
-                colliders.insert_with_parent(collider, ground, &mut bodies);
-            }
-        }
+        // Every shape here is a simple one (segment, cuboid, ball, convex polygon), which is all
+        // `Compound::new` asks for besides a non-empty list.
+        let fixed_scene = (!fixed_shapes.is_empty()).then(|| Compound::new(fixed_shapes));
         let half_length = profile.geometry.body_length_m * 0.5;
         // No CCD: at its top speed (1.2 m/s) the robot moves 6 mm per 5 ms step, far less than
         // its 24 cm width, so it cannot tunnel through a wall (the physics tests check it);
@@ -107,6 +116,7 @@ impl SimWorld {
             ccd: CCDSolver::new(),
             pipeline: PhysicsPipeline::new(),
             params,
+            fixed_scene,
             robot,
             robot_collider,
             half_length,
@@ -226,18 +236,11 @@ impl SimWorld {
         }
     }
 
-    /// Casts a ray from world point `origin` along unit `dir`; the robot itself is transparent.
-    /// A miss within `max` metres is `None`.
+    /// Casts a ray from world point `origin` along unit `dir` against the walls and obstacles
+    /// (the robot itself is transparent). A miss within `max` metres is `None`.
     pub fn cast_range(&self, origin: (f32, f32), dir: (f32, f32), max: f32) -> Option<RayHit> {
-        let filter = QueryFilter::new().exclude_rigid_body(self.robot);
-        let query = self.broad_phase.as_query_pipeline(
-            self.narrow_phase.query_dispatcher(),
-            &self.bodies,
-            &self.colliders,
-            filter,
-        );
         let ray = Ray::new(Vector::new(origin.0, origin.1), Vector::new(dir.0, dir.1));
-        let (_, hit) = query.cast_ray_and_get_normal(&ray, max, true)?;
+        let hit = self.fixed_scene.as_ref()?.cast_local_ray_and_get_normal(&ray, max, true)?;
         // Angle between the reversed ray and the surface normal.
         let cos = -(dir.0 * hit.normal.x + dir.1 * hit.normal.y);
         Some(RayHit { distance: hit.time_of_impact, incidence: cos.abs().clamp(0.0, 1.0).acos() })

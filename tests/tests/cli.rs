@@ -69,3 +69,28 @@ fn a_run_writes_its_files_and_replays_identically() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("bad.rec"));
     std::fs::remove_dir_all(&out_dir).unwrap();
 }
+
+#[test]
+fn bench_prints_every_sonar_variant_with_median_and_best() {
+    let out = explobot()
+        .args(["bench", "scenarios/empty.ron", "--physics-only", "--steps", "2000", "--rounds", "3"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with("empty "))
+        .map(|l| l.split("  ").map(str::trim).filter(|c| !c.is_empty()).collect())
+        .collect();
+    let labels: Vec<&str> = rows.iter().map(|r| r[1]).collect();
+    assert_eq!(labels, ["off", "60 ms cycle", "every step"], "{text}");
+    for row in &rows {
+        let median: f64 = row[2].parse().unwrap();
+        let best: f64 = row[3].parse().unwrap();
+        assert!(median > 0.0 && best >= median, "{text}");
+    }
+    // The sonar does not move the robot: every variant drives the same trajectory.
+    let collisions: Vec<&str> = rows.iter().map(|r| r[5]).collect();
+    assert!(collisions.iter().all(|c| *c == collisions[0]), "{text}");
+}

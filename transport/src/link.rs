@@ -126,6 +126,22 @@ pub trait Link {
 
     /// Queues as many bytes of `buf` as fit now and returns how many; the caller keeps the rest.
     fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error>;
+
+    /// Appends every byte that has arrived to `out` and returns how many that was. On an error,
+    /// the bytes read before it are already in `out` (nothing is lost).
+    fn read_available(&mut self, out: &mut Vec<u8>) -> Result<usize, Self::Error> {
+        let mut chunk = [0u8; 512];
+        let mut total = 0;
+        loop {
+            match self.read(&mut chunk)? {
+                0 => return Ok(total),
+                n => {
+                    out.extend_from_slice(&chunk[..n]);
+                    total += n;
+                }
+            }
+        }
+    }
 }
 
 impl<L: Link + ?Sized> Link for &mut L {
@@ -174,4 +190,49 @@ pub trait Connector {
     /// Tries once to connect. Failure is an error (e.g. [`ErrorKind::Disconnected`] when nobody
     /// listens); the caller decides when to try again.
     fn connect(&mut self) -> Result<Self::Link, Self::Error>;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Hands out `chunks` one `read` at a time, then fails if `then_fail`, else reports nothing.
+    struct Scripted {
+        chunks: Vec<Vec<u8>>,
+        then_fail: bool,
+    }
+
+    impl Link for Scripted {
+        type Error = Error;
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
+            if self.chunks.is_empty() {
+                return if self.then_fail { Err(Error::disconnected("peer gone")) } else { Ok(0) };
+            }
+            let chunk = self.chunks.remove(0);
+            buf[..chunk.len()].copy_from_slice(&chunk);
+            Ok(chunk.len())
+        }
+        fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
+            Ok(buf.len())
+        }
+    }
+
+    #[test]
+    fn read_available_appends_every_chunk_until_nothing_is_left() {
+        let mut link = Scripted { chunks: vec![vec![1, 2], vec![3; 512], vec![4]], then_fail: false };
+        let mut out = vec![0];
+        assert_eq!(link.read_available(&mut out).unwrap(), 515);
+        assert_eq!(out.len(), 516);
+        assert_eq!((out[0], out[1], out[3], out[515]), (0, 1, 3, 4));
+        assert_eq!(link.read_available(&mut out).unwrap(), 0);
+    }
+
+    #[test]
+    fn read_available_keeps_the_bytes_read_before_an_error() {
+        let mut link = Scripted { chunks: vec![vec![7, 8, 9]], then_fail: true };
+        let mut out = Vec::new();
+        let err = link.read_available(&mut out).unwrap_err();
+        assert_eq!(err.kind(), ErrorKind::Disconnected);
+        assert_eq!(out, [7, 8, 9]);
+    }
 }
