@@ -68,17 +68,15 @@ fn read_until(
     panic!("timed out; received so far: {seen:?}");
 }
 
-#[test]
-fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf();
-    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&run_dir);
-
-    // 1. The twin, in real time, printing its pose every half second.
+/// The twin serving `scenarios/empty.ron` in real time on ptys in `run_dir` (its pose printed
+/// every half second, sent line by line to the receiver) and the unchanged `carto` binary on those
+/// ptys, listening for Cute on the returned port.
+fn start_twin_and_carto(root: &Path, run_dir: &Path) -> (Guard, Guard, mpsc::Receiver<String>, u16) {
+    let _ = std::fs::remove_dir_all(run_dir);
     let mut twin = Command::new(binary("explobot"))
         .args(["sim", "scenarios/empty.ron", "--serve", "--status-every", "0.5", "--run-dir"])
-        .arg(&run_dir)
-        .current_dir(&root)
+        .arg(run_dir)
+        .current_dir(root)
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
@@ -98,8 +96,6 @@ fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
         assert!(Instant::now() < deadline, "the twin did not create its ptys");
         std::thread::sleep(Duration::from_millis(20));
     }
-
-    // 2. The unchanged carto binary on those ptys.
     let port = free_port();
     let carto = Command::new(binary("carto"))
         .args(["--transport", "sim", "--motor-port"])
@@ -107,14 +103,27 @@ fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
         .arg("--sensor-port")
         .arg(run_dir.join("tty-sensor"))
         .args(["--listen", &format!("127.0.0.1:{port}"), "--profile", "scenarios/robots/mecanum-4wd.ron"])
-        .current_dir(&root)
+        .current_dir(root)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
         .expect("start carto");
-    let _carto = Guard(carto);
+    (twin, Guard(carto), lines, port)
+}
+
+fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+#[test]
+fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
+    let root = workspace_root();
+    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-{}", std::process::id()));
+    // 1. The twin, in real time, and 2. the unchanged carto binary on its ptys.
+    let (twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir);
 
     // 3. A client over TCP, as Cute.
+    let deadline = Instant::now() + Duration::from_secs(20);
     let mut link = loop {
         match TcpLink::connect(("127.0.0.1", port)) {
             Ok(l) => break l,
@@ -148,4 +157,81 @@ fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
         }
     }
     panic!("the twin never reported the robot in cell (0, 1); last status: {last}");
+}
+
+/// The standalone `cute` window, unchanged, against the served twin and the `carto` binary: it
+/// connects, sends the start position, runs cartography on its own (`--cartography`) and saves a
+/// screenshot after 12 s of wall time. The twin must have carried the robot along the first row
+/// of the serpentine, and the screenshot must show the cells behind it mapped.
+#[cfg(feature = "window")]
+#[test]
+fn cute_binary_maps_the_served_twin_through_the_carto_binary() {
+    use bevy::math::Vec2;
+    use cute::CellValue;
+    use cute::gui::{CuteView, MapLayout, cell_rgb};
+
+    if std::env::var_os("DISPLAY").is_none() {
+        println!(
+            "SKIPPED cute_binary_maps_the_served_twin_through_the_carto_binary: no display; run under xvfb-run"
+        );
+        return;
+    }
+    let root = workspace_root();
+    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-cute-{}", std::process::id()));
+    let (twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir);
+    let shot = run_dir.join("cute.png");
+
+    let (rows, cols) = (6usize, 8usize); // scenarios/empty.ron
+    let mut cute = Command::new(binary("cute"))
+        .args(["--connect", &format!("127.0.0.1:{port}"), "--rows", "6", "--cols", "8"])
+        .args(["--heading", "east", "--cartography", "--screenshot-after", "12", "--screenshot"])
+        .arg(&shot)
+        .current_dir(&root)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start cute");
+    let deadline = Instant::now() + Duration::from_secs(90);
+    let status = loop {
+        if let Some(status) = cute.try_wait().unwrap() {
+            break status;
+        }
+        if Instant::now() > deadline {
+            let _ = cute.kill();
+            panic!("cute did not take its screenshot and exit within 90 s");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    let mut errors = String::new();
+    std::io::Read::read_to_string(&mut cute.stderr.take().unwrap(), &mut errors).unwrap();
+    assert!(status.success(), "cute exited with {status}: {errors}");
+
+    // The twin's physics: the robot went east along row 0, at least two cells.
+    let statuses: Vec<String> = lines.try_iter().collect();
+    assert!(
+        statuses.iter().any(|l| l.contains("cell (0, 2)")),
+        "the twin never had the robot in cell (0, 2): {statuses:?}"
+    );
+
+    // Cute's window: the cells it crossed are mapped, the far corner is not.
+    let img = image::open(&shot).unwrap().to_rgb8();
+    let (w, h) = (img.width() as f32, img.height() as f32);
+    let layout = MapLayout::compute(Vec2::new(w, h), &CuteView::default(), rows, cols);
+    let colour = |row: usize, col: usize| {
+        let p = layout.cell_rect(row, col).min + Vec2::splat(layout.cell * 0.2);
+        img.get_pixel(p.x as u32, p.y as u32).0
+    };
+    let is =
+        |got: [u8; 3], value: CellValue| got.iter().zip(cell_rgb(value)).all(|(&a, b)| a.abs_diff(b) <= 12);
+    for col in 0..2 {
+        let got = colour(0, col);
+        assert!(
+            is(got, CellValue::Free) || is(got, CellValue::Robot),
+            "cell (0, {col}) should be mapped, its pixel is {got:?}"
+        );
+    }
+    let corner = colour(rows - 1, cols - 1);
+    assert!(is(corner, CellValue::Unknown), "the far corner should be unknown, its pixel is {corner:?}");
+    drop(twin);
+    let _ = std::fs::remove_dir_all(&run_dir);
 }
