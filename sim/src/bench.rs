@@ -37,13 +37,15 @@ pub struct PhysicsFigure {
     pub steps: u64,
     /// Wall-clock seconds of each round.
     pub wall_s: Vec<f64>,
-    /// Collisions (contact starts) in one round: the pattern should keep the robot clear of the
-    /// walls, as Carto does, so that the figure is not dominated by the contact solver.
+    /// Collisions (contact starts) in one round. The pattern stays near the start cell, as the
+    /// robot does under Carto; a large count means the figure includes the contact solver
+    /// grinding along a wall (one-cell corridors).
     pub collisions: u32,
 }
 
 impl PhysicsFigure {
-    /// Physics steps per wall-clock second in the median round.
+    /// Physics steps per wall-clock second in the median round (the upper middle one for an even
+    /// number of rounds).
     pub fn median_steps_per_s(&self) -> f64 {
         let mut rates: Vec<f64> = self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9)).collect();
         rates.sort_by(f64::total_cmp);

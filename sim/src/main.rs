@@ -128,8 +128,8 @@ enum Command {
         #[arg(long, default_value_t = 100_000)]
         steps: u64,
         /// Rounds per physics measurement (the median and the best round are printed).
-        #[arg(long, default_value_t = 5)]
-        rounds: usize,
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u16).range(1..))]
+        rounds: u16,
         /// Only the physics figures.
         #[arg(long)]
         physics_only: bool,
@@ -402,7 +402,7 @@ fn replay(path: &Path) -> Result<ExitCode> {
     }
 }
 
-fn bench_cmd(scenarios: &[PathBuf], steps: u64, rounds: usize, physics_only: bool) -> Result<ExitCode> {
+fn bench_cmd(scenarios: &[PathBuf], steps: u64, rounds: u16, physics_only: bool) -> Result<ExitCode> {
     let list: Vec<Option<&Path>> =
         if scenarios.is_empty() { vec![None] } else { scenarios.iter().map(|p| Some(p.as_path())).collect() };
     println!("physics: {steps} steps of the robot in each room, {rounds} rounds per variant, one thread");
@@ -414,7 +414,7 @@ fn bench_cmd(scenarios: &[PathBuf], steps: u64, rounds: usize, physics_only: boo
         let loaded = load(*s)?;
         let dt =
             robot_model::time::Duration::from_secs_f64(f64::from(loaded.scenario.physics.step_ms) / 1000.0);
-        for f in bench::physics(&loaded, steps, rounds) {
+        for f in bench::physics(&loaded, steps, usize::from(rounds)) {
             let label = match f.sonar {
                 SonarLoad::Off => "off",
                 SonarLoad::PerCycle => "60 ms cycle",

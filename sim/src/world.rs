@@ -125,8 +125,8 @@ impl SimWorld {
             collisions: 0,
             front_contact: false,
         };
-        // The broad phase (and so every ray cast) only knows the colliders after a step: take a
-        // zero-length one so the sonar works from time zero.
+        // A zero-length step builds the broad phase and the contact graph before the first real
+        // step (kept because the recorded runs and snapshots start from that state).
         world.params.dt = 0.0;
         world.step();
         world.params.dt = dt;

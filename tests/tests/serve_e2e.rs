@@ -1,7 +1,8 @@
 //! The transport swap, end to end in separate processes: `explobot sim --serve` exposes the
-//! twin's boards on pseudo-terminals, the unchanged `carto` binary opens them as serial ports, and
-//! a client speaking the link protocol over TCP moves the robot one cell and reads its new
-//! position — as Cute would against the real robot.
+//! twin's boards on pseudo-terminals and the unchanged `carto` binary opens them as serial ports.
+//! Then either a client speaking the link protocol over TCP moves the robot one cell and reads its
+//! new position — as Cute would against the real robot — or (feature `window`, with a display)
+//! the unchanged `cute` window connects and runs cartography by itself.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
@@ -22,6 +23,23 @@ impl Drop for Guard {
     fn drop(&mut self) {
         let _ = self.0.kill();
         let _ = self.0.wait();
+    }
+}
+
+/// A scratch folder removed when the test ends, passed or failed.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        TempDir(dir)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
     }
 }
 
@@ -72,7 +90,6 @@ fn read_until(
 /// every half second, sent line by line to the receiver) and the unchanged `carto` binary on those
 /// ptys, listening for Cute on the returned port.
 fn start_twin_and_carto(root: &Path, run_dir: &Path) -> (Guard, Guard, mpsc::Receiver<String>, u16) {
-    let _ = std::fs::remove_dir_all(run_dir);
     let mut twin = Command::new(binary("explobot"))
         .args(["sim", "scenarios/empty.ron", "--serve", "--status-every", "0.5", "--run-dir"])
         .arg(run_dir)
@@ -118,9 +135,9 @@ fn workspace_root() -> PathBuf {
 #[test]
 fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
     let root = workspace_root();
-    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-{}", std::process::id()));
+    let run_dir = TempDir::new("explobot-e2e");
     // 1. The twin, in real time, and 2. the unchanged carto binary on its ptys.
-    let (twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir);
+    let (twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir.0);
 
     // 3. A client over TCP, as Cute.
     let deadline = Instant::now() + Duration::from_secs(20);
@@ -150,7 +167,6 @@ fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
         if let Ok(line) = lines.recv_timeout(Duration::from_millis(200)) {
             if line.contains("cell (0, 1)") {
                 drop(twin);
-                let _ = std::fs::remove_dir_all(&run_dir);
                 return;
             }
             last = line;
@@ -161,8 +177,9 @@ fn carto_binary_drives_the_served_twin_over_ptys_one_cell_forward() {
 
 /// The standalone `cute` window, unchanged, against the served twin and the `carto` binary: it
 /// connects, sends the start position, runs cartography on its own (`--cartography`) and saves a
-/// screenshot after 12 s of wall time. The twin must have carried the robot along the first row
-/// of the serpentine, and the screenshot must show the cells behind it mapped.
+/// screenshot after 20 s of its wall clock, then exits. By then the twin must have carried the
+/// robot at least to cell (0, 2) along the serpentine's first row, and the screenshot must show
+/// cells (0, 0) and (0, 1) mapped and the far corner still unknown.
 #[cfg(feature = "window")]
 #[test]
 fn cute_binary_maps_the_served_twin_through_the_carto_binary() {
@@ -177,34 +194,44 @@ fn cute_binary_maps_the_served_twin_through_the_carto_binary() {
         return;
     }
     let root = workspace_root();
-    let run_dir = std::env::temp_dir().join(format!("explobot-e2e-cute-{}", std::process::id()));
-    let (twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir);
-    let shot = run_dir.join("cute.png");
+    let run_dir = TempDir::new("explobot-e2e-cute");
+    let (_twin, _carto, lines, port) = start_twin_and_carto(&root, &run_dir.0);
+    // Carto listens before cute starts, so cute does not begin with its connect back-off. The
+    // probe connection closes at once; Carto notices within a step or two.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while TcpLink::connect(("127.0.0.1", port)).is_err() {
+        assert!(Instant::now() < deadline, "carto never listened on {port}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let shot = run_dir.0.join("cute.png");
+    // cute's log goes to a file: a pipe nobody reads could fill up and block it.
+    let log_path = run_dir.0.join("cute.log");
+    let log = std::fs::File::create(&log_path).unwrap();
 
     let (rows, cols) = (6usize, 8usize); // scenarios/empty.ron
-    let mut cute = Command::new(binary("cute"))
-        .args(["--connect", &format!("127.0.0.1:{port}"), "--rows", "6", "--cols", "8"])
-        .args(["--heading", "east", "--cartography", "--screenshot-after", "12", "--screenshot"])
-        .arg(&shot)
-        .current_dir(&root)
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start cute");
-    let deadline = Instant::now() + Duration::from_secs(90);
+    let mut cute = Guard(
+        Command::new(binary("cute"))
+            .args(["--connect", &format!("127.0.0.1:{port}"), "--rows", "6", "--cols", "8"])
+            .args(["--heading", "east", "--cartography", "--screenshot-after", "20", "--screenshot"])
+            .arg(&shot)
+            .current_dir(&root)
+            .stdout(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .expect("start cute"),
+    );
+    let deadline = Instant::now() + Duration::from_secs(120);
     let status = loop {
-        if let Some(status) = cute.try_wait().unwrap() {
+        if let Some(status) = cute.0.try_wait().unwrap() {
             break status;
         }
-        if Instant::now() > deadline {
-            let _ = cute.kill();
-            panic!("cute did not take its screenshot and exit within 90 s");
-        }
+        let log = std::fs::read_to_string(&log_path).unwrap_or_default();
+        assert!(Instant::now() < deadline, "cute did not take its screenshot and exit within 120 s: {log}");
         std::thread::sleep(Duration::from_millis(100));
     };
-    let mut errors = String::new();
-    std::io::Read::read_to_string(&mut cute.stderr.take().unwrap(), &mut errors).unwrap();
-    assert!(status.success(), "cute exited with {status}: {errors}");
+    let log = std::fs::read_to_string(&log_path).unwrap_or_default();
+    assert!(status.success(), "cute exited with {status}: {log}");
 
     // The twin's physics: the robot went east along row 0, at least two cells.
     let statuses: Vec<String> = lines.try_iter().collect();
@@ -232,6 +259,4 @@ fn cute_binary_maps_the_served_twin_through_the_carto_binary() {
     }
     let corner = colour(rows - 1, cols - 1);
     assert!(is(corner, CellValue::Unknown), "the far corner should be unknown, its pixel is {corner:?}");
-    drop(twin);
-    let _ = std::fs::remove_dir_all(&run_dir);
 }

@@ -128,7 +128,10 @@ pub trait Link {
     fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error>;
 
     /// Appends every byte that has arrived to `out` and returns how many that was. On an error,
-    /// the bytes read before it are already in `out` (nothing is lost).
+    /// the bytes read before it are already in `out` (nothing is lost). There is no cap: it reads
+    /// until the link has nothing more, so a peer that writes faster than this drains keeps it
+    /// in the loop (Carto's server, which faces unknown clients, reads a bounded number of chunks
+    /// per step instead).
     fn read_available(&mut self, out: &mut Vec<u8>) -> Result<usize, Self::Error> {
         let mut chunk = [0u8; 512];
         let mut total = 0;
@@ -152,6 +155,9 @@ impl<L: Link + ?Sized> Link for &mut L {
     fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
         L::write(self, buf)
     }
+    fn read_available(&mut self, out: &mut Vec<u8>) -> Result<usize, Self::Error> {
+        L::read_available(self, out)
+    }
 }
 
 impl<L: Link + ?Sized> Link for Box<L> {
@@ -161,6 +167,9 @@ impl<L: Link + ?Sized> Link for Box<L> {
     }
     fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
         L::write(self, buf)
+    }
+    fn read_available(&mut self, out: &mut Vec<u8>) -> Result<usize, Self::Error> {
+        L::read_available(self, out)
     }
 }
 
