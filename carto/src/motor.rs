@@ -17,6 +17,12 @@
 //! strafes back as a settle correction (a **Strafe** phase). The stop point also learns the robot's
 //! systematic overshoot ([`Motor::coast_bias_m`]).
 //!
+//! A turn never starts while the robot may still be coasting: when the wheels were commanded to
+//! zero less than [`CartoConfig::settle_time`] ago (a STOP in the middle of a FORWARD, then at once
+//! a RIGHT), the turn first waits (a **Rest** phase, zero command) for encoder readings taken after
+//! that time. The odometry ignores translation while turning, so coasting during a turn would be
+//! lost and the next FORWARD would correct its track for the wrong offset.
+//!
 //! Turns and the heading hold aim at a *reference yaw* that moves by exactly 90° per successful
 //! turn, so turn errors do not accumulate; it is learnt from the IMU on the first move and re-learnt
 //! when the IMU disagrees with it by more than 20° (robot pushed, a failed turn).
@@ -112,6 +118,11 @@ enum Goal {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
+    /// A turn waiting for the robot to come to rest (zero command) until readings taken at
+    /// `until` or later have arrived.
+    Rest {
+        until: Instant,
+    },
     Active {
         since: Instant,
         sign: f64,
@@ -151,6 +162,8 @@ pub struct Motor {
     last_baseline: Option<[i32; 4]>,
     odo: Odometry,
     coast_bias_m: f64,
+    /// When the command last went from moving to zero.
+    zeroed_at: Option<Instant>,
 }
 
 impl Motor {
@@ -167,6 +180,7 @@ impl Motor {
             last_baseline: None,
             odo: Odometry::default(),
             coast_bias_m: 0.0,
+            zeroed_at: None,
         }
     }
 
@@ -291,7 +305,9 @@ impl Motor {
     /// Runs the control loop and the periodic resend. A finished move's outcome becomes
     /// available from [`Motor::take_outcome`].
     pub fn poll(&mut self, now: Instant, s: &SensorState) {
-        let turning = self.current.is_some_and(|m| matches!(m.goal, Goal::Yaw { .. }));
+        let turning = self
+            .current
+            .is_some_and(|m| matches!(m.goal, Goal::Yaw { .. }) && !matches!(m.phase, Phase::Rest { .. }));
         self.odo.update_with(s, &self.cfg, !turning);
         if let Some(mut m) = self.current {
             match self.step(now, &mut m, s) {
@@ -333,6 +349,9 @@ impl Motor {
     }
 
     fn set_command(&mut self, now: Instant, drive: Drive, force: bool) {
+        if drive == Drive::STOP && self.command != Drive::STOP {
+            self.zeroed_at = Some(now);
+        }
         self.command = drive;
         let changed = self.last_sent.is_none_or(|(d, _)| d != drive);
         if changed || force {
@@ -352,7 +371,14 @@ impl Motor {
             advance_m,
             first_stop_err: None,
         };
-        m.phase = Phase::Active { since: now, sign: self.error(&m, now, s, true).map_or(1.0, sign_of) };
+        let coasting_until = self.zeroed_at.map(|at| at + self.cfg.settle_time).filter(|until| now < *until);
+        m.phase = match (goal, coasting_until) {
+            (Goal::Yaw { .. }, Some(until)) => {
+                tracing::debug!(wait_ms = until.saturating_since(now).total_millis(), "turn waits for rest");
+                Phase::Rest { until }
+            }
+            _ => Phase::Active { since: now, sign: self.error(&m, now, s, true).map_or(1.0, sign_of) },
+        };
         self.current = Some(m);
         self.poll(now, s);
     }
@@ -467,6 +493,16 @@ impl Motor {
         }
         let is_distance = matches!(m.goal, Goal::Distance { .. });
         match m.phase {
+            Phase::Rest { until } => {
+                if !s.counts_since().is_some_and(|t| t >= until) {
+                    return Step::Continue(Drive::STOP);
+                }
+                let Some(err) = self.error(m, now, s, true) else {
+                    return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
+                };
+                m.phase = Phase::Active { since: now, sign: sign_of(err) };
+                self.step(now, m, s)
+            }
             Phase::Active { since, sign } => {
                 // Readings must keep coming while moving.
                 if let Err(e) = self.check_fresh(m, now, s) {

@@ -573,6 +573,27 @@ fn forward_after_a_stop_mid_move_completes_to_the_next_cell_centre() {
 }
 
 #[test]
+fn a_turn_right_after_a_stop_mid_move_waits_until_the_robot_is_at_rest() {
+    let mut h = ready();
+    h.send(cartography(Command::Forward));
+    h.run_ms(700); // part of the way, still driving
+    let stop_at = h.now;
+    h.send(GuiMessage::StopRobot);
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
+    let drives = h.robot.drives_since(stop_at);
+    let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
+    let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
+    let waited = turn.saturating_since(zero);
+    assert!(
+        waited >= Duration::from_millis(200),
+        "the turn started {} ms after the zero drive",
+        waited.total_millis()
+    );
+    assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
+}
+
+#[test]
 fn resending_the_held_pose_keeps_the_cell_offset_and_a_new_pose_resets_it() {
     let mut h = ready();
     let origin = h.robot.x;

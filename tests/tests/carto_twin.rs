@@ -258,6 +258,37 @@ fn stop_in_the_middle_of_a_batch_zeroes_the_wheels_within_100_ms_and_drops_the_r
     assert!(rig.wheels_commanded_to_zero());
 }
 
+/// A STOP mid-FORWARD, then at once a RIGHT and a FORWARD: the robot still coasts when the turn
+/// is asked for. Carto lets it come to rest before turning (a turn's odometry ignores translation,
+/// so the coasting would otherwise be lost), and the FORWARD then lands on the next cell's centre,
+/// its track corrected for where the STOP really left the robot.
+#[test]
+fn a_turn_right_after_a_stop_mid_move_keeps_the_coasting_in_the_odometry() {
+    let mut rig = rig("");
+    let mut c = rig.ready_client();
+    for _ in 0..2 {
+        c.send(GuiMessage::SendMovesTrajectory { n_total: 2, command: Command::Forward });
+    }
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::SetRobotPosition { x: 2, y: 3 }));
+    rig.run(0.5); // in the middle of the second FORWARD, at cruise speed
+    assert!(!rig.wheels_commanded_to_zero(), "the robot should be driving");
+    c.send(GuiMessage::StopRobot);
+    c.send(GuiMessage::SendMoveCartography { command: Command::Right });
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    c.received.clear();
+    c.send(GuiMessage::SendMoveCartography { command: Command::Forward });
+    rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    assert_eq!(c.received, vec![GuiMessage::SetRobotPosition { x: 3, y: 3 }, GuiMessage::MoveDone]);
+    let (cx, cy) = rig.centre(3, 3);
+    let p = rig.pose();
+    assert!(
+        (p.x - cx).abs() < 0.02 && (p.y - cy).abs() < 0.02,
+        "robot at ({:.3}, {:.3}), centre of (3, 3) at ({cx:.3}, {cy:.3})",
+        p.x,
+        p.y
+    );
+}
+
 #[test]
 fn a_second_client_is_refused_and_a_disconnect_stops_the_motors() {
     let mut rig = rig("");
