@@ -20,7 +20,7 @@
 //! A turn never starts while the robot may still be coasting: when the wheels were commanded to
 //! zero less than [`CartoConfig::settle_time`] ago (a STOP in the middle of a FORWARD, then at once
 //! a RIGHT), the turn first waits (a **Rest** phase, zero command) for encoder readings taken after
-//! that time. The odometry ignores translation while turning, so coasting during a turn would be
+//! that time (or, with no fresh encoder readings, for that time on the clock). The odometry ignores translation while turning, so coasting during a turn would be
 //! lost and the next FORWARD would correct its track for the wrong offset.
 //!
 //! Turns and the heading hold aim at a *reference yaw* that moves by exactly 90° per successful
@@ -494,7 +494,11 @@ impl Motor {
         let is_distance = matches!(m.goal, Goal::Distance { .. });
         match m.phase {
             Phase::Rest { until } => {
-                if !s.counts_since().is_some_and(|t| t >= until) {
+                // Readings at rest, or, without fresh encoder readings (the turn itself needs only
+                // the IMU), the settle time on the clock.
+                let at_rest = s.counts_since().is_some_and(|t| t >= until)
+                    || (self.fresh_counts(now, s).is_err() && now >= until);
+                if !at_rest {
                     return Step::Continue(Drive::STOP);
                 }
                 let Some(err) = self.error(m, now, s, true) else {

@@ -594,6 +594,23 @@ fn a_turn_right_after_a_stop_mid_move_waits_until_the_robot_is_at_rest() {
 }
 
 #[test]
+fn a_turn_after_a_stop_without_encoder_readings_waits_the_settle_time_and_turns() {
+    let mut h = ready();
+    h.send(cartography(Command::Forward));
+    h.run_ms(700);
+    h.robot.send_encoders = false;
+    let stop_at = h.now;
+    h.send(GuiMessage::StopRobot);
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
+    let drives = h.robot.drives_since(stop_at);
+    let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
+    let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
+    assert!(turn.saturating_since(zero) >= Duration::from_millis(200));
+    assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
+}
+
+#[test]
 fn resending_the_held_pose_keeps_the_cell_offset_and_a_new_pose_resets_it() {
     let mut h = ready();
     let origin = h.robot.x;

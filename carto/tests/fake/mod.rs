@@ -39,6 +39,7 @@ pub struct FakeRobot {
     /// Streams that can be switched off.
     pub send_keep_state: bool,
     pub send_distance: bool,
+    pub send_encoders: bool,
     pub send_telemetry: bool,
     /// Wheels jammed: commands are decoded but nothing moves.
     pub jammed: bool,
@@ -81,6 +82,7 @@ impl FakeRobot {
             bumper_sent: None,
             send_keep_state: true,
             send_distance: true,
+            send_encoders: true,
             send_telemetry: false,
             jammed: false,
             tau_s: 0.080,
@@ -202,7 +204,7 @@ impl FakeRobot {
         }
         if now >= self.next[ENC] {
             self.next[ENC] += Duration::from_millis(200);
-            for (i, c) in self.counts.iter().enumerate() {
+            for (i, c) in self.counts.iter().enumerate().filter(|_| self.send_encoders) {
                 let direction = if self.wheel_pct[i] >= 0.0 {
                     EncoderDirection::Forward
                 } else {
