@@ -20,8 +20,10 @@
 //! A turn never starts while the robot may still be coasting: when the wheels were commanded to
 //! zero less than [`CartoConfig::settle_time`] ago (a STOP in the middle of a FORWARD, then at once
 //! a RIGHT), the turn first waits (a **Rest** phase, zero command) for encoder readings taken after
-//! that time (or, with no fresh encoder readings, for that time on the clock). The odometry ignores translation while turning, so coasting during a turn would be
-//! lost and the next FORWARD would correct its track for the wrong offset.
+//! that time; if the encoder readings have gone stale
+//! ([`CartoConfig::sensor_stale_after`]), it turns once that time has passed. The odometry ignores
+//! translation while turning, so coasting during a turn would be lost and the next FORWARD would
+//! correct its track for the wrong offset.
 //!
 //! Turns and the heading hold aim at a *reference yaw* that moves by exactly 90° per successful
 //! turn, so turn errors do not accumulate; it is learnt from the IMU on the first move and re-learnt
@@ -272,8 +274,10 @@ impl Motor {
     pub fn stop(&mut self, now: Instant) {
         if let Some(m) = self.current.take()
             && let Goal::Yaw { .. } = m.goal
+            && !matches!(m.phase, Phase::Rest { .. })
         {
-            // A turn cut short leaves the heading between two grid headings.
+            // A turn cut short leaves the heading between two grid headings (one still waiting
+            // for rest has not turned yet).
             self.reference_deg = None;
         }
         self.outcome = None;
@@ -494,8 +498,8 @@ impl Motor {
         let is_distance = matches!(m.goal, Goal::Distance { .. });
         match m.phase {
             Phase::Rest { until } => {
-                // Readings at rest, or, without fresh encoder readings (the turn itself needs only
-                // the IMU), the settle time on the clock.
+                // Readings at rest, or, once the encoder readings have gone stale (the turn itself
+                // needs only the IMU), the settle time on the clock.
                 let at_rest = s.counts_since().is_some_and(|t| t >= until)
                     || (self.fresh_counts(now, s).is_err() && now >= until);
                 if !at_rest {

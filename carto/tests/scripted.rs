@@ -585,12 +585,31 @@ fn a_turn_right_after_a_stop_mid_move_waits_until_the_robot_is_at_rest() {
     let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
     let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
     let waited = turn.saturating_since(zero);
+    // settle_time (200 ms) plus at most one encoder period (200 ms) and the link's byte time.
     assert!(
-        waited >= Duration::from_millis(200),
+        waited >= Duration::from_millis(200) && waited <= Duration::from_millis(450),
         "the turn started {} ms after the zero drive",
         waited.total_millis()
     );
     assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
+}
+
+#[test]
+fn a_turn_after_a_finished_forward_starts_at_once() {
+    let mut h = ready();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
+    let asked_at = h.now;
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 2));
+    let drives = h.robot.drives_since(asked_at);
+    let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
+    let waited = turn.saturating_since(asked_at);
+    assert!(
+        waited <= Duration::from_millis(20),
+        "the turn started {} ms after it was asked",
+        waited.total_millis()
+    );
 }
 
 #[test]
@@ -606,7 +625,13 @@ fn a_turn_after_a_stop_without_encoder_readings_waits_the_settle_time_and_turns(
     let drives = h.robot.drives_since(stop_at);
     let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
     let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
-    assert!(turn.saturating_since(zero) >= Duration::from_millis(200));
+    // Until the encoder readings are stale (600 ms after the last one), not until a timeout.
+    let waited = turn.saturating_since(zero);
+    assert!(
+        waited >= Duration::from_millis(200) && waited <= Duration::from_millis(850),
+        "the turn started {} ms after the zero drive",
+        waited.total_millis()
+    );
     assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
 }
 

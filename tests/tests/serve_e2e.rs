@@ -226,8 +226,10 @@ fn cute_binary_maps_the_served_twin_through_the_carto_binary() {
         if let Some(status) = cute.0.try_wait().unwrap() {
             break status;
         }
-        let log = std::fs::read_to_string(&log_path).unwrap_or_default();
-        assert!(Instant::now() < deadline, "cute did not take its screenshot and exit within 120 s: {log}");
+        if Instant::now() >= deadline {
+            let log = std::fs::read_to_string(&log_path).unwrap_or_default();
+            panic!("cute did not take its screenshot and exit within 120 s: {log}");
+        }
         std::thread::sleep(Duration::from_millis(100));
     };
     let log = std::fs::read_to_string(&log_path).unwrap_or_default();
