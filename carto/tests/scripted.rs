@@ -572,26 +572,45 @@ fn forward_after_a_stop_mid_move_completes_to_the_next_cell_centre() {
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 6)));
 }
 
-#[test]
-fn a_turn_right_after_a_stop_mid_move_waits_until_the_robot_is_at_rest() {
+/// STOP part of the way through a FORWARD and ask for a RIGHT at once (with the encoders muted
+/// from the STOP on unless `encoders`); returns how long after the zero drive the turn's first
+/// drive came. The turn must have completed.
+fn right_at_once_after_a_stop_mid_forward(encoders: bool) -> Duration {
     let mut h = ready();
     h.send(cartography(Command::Forward));
     h.run_ms(700); // part of the way, still driving
+    h.robot.send_encoders = encoders;
     let stop_at = h.now;
     h.send(GuiMessage::StopRobot);
     h.send(cartography(Command::Right));
     assert!(h.run_until(8000, |h| h.move_done_count() == 1));
+    assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
     let drives = h.robot.drives_since(stop_at);
     let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
     let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
-    let waited = turn.saturating_since(zero);
+    turn.saturating_since(zero)
+}
+
+#[test]
+fn a_turn_right_after_a_stop_mid_move_waits_until_the_robot_is_at_rest() {
+    let waited = right_at_once_after_a_stop_mid_forward(true);
     // settle_time (200 ms) plus at most one encoder period (200 ms) and the link's byte time.
     assert!(
         waited >= Duration::from_millis(200) && waited <= Duration::from_millis(450),
         "the turn started {} ms after the zero drive",
         waited.total_millis()
     );
-    assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
+}
+
+#[test]
+fn a_turn_after_a_stop_without_encoder_readings_waits_the_settle_time_and_turns() {
+    let waited = right_at_once_after_a_stop_mid_forward(false);
+    // Until the encoder readings are stale (600 ms after the last one), not until a timeout.
+    assert!(
+        waited >= Duration::from_millis(200) && waited <= Duration::from_millis(850),
+        "the turn started {} ms after the zero drive",
+        waited.total_millis()
+    );
 }
 
 #[test]
@@ -610,29 +629,6 @@ fn a_turn_after_a_finished_forward_starts_at_once() {
         "the turn started {} ms after it was asked",
         waited.total_millis()
     );
-}
-
-#[test]
-fn a_turn_after_a_stop_without_encoder_readings_waits_the_settle_time_and_turns() {
-    let mut h = ready();
-    h.send(cartography(Command::Forward));
-    h.run_ms(700);
-    h.robot.send_encoders = false;
-    let stop_at = h.now;
-    h.send(GuiMessage::StopRobot);
-    h.send(cartography(Command::Right));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
-    let drives = h.robot.drives_since(stop_at);
-    let zero = drives.iter().find(|(_, d)| d.is_stop()).map(|(t, _)| *t).expect("a zero drive after STOP");
-    let turn = drives.iter().find(|(_, d)| d.omega != 0).map(|(t, _)| *t).expect("the turn's drive");
-    // Until the encoder readings are stale (600 ms after the last one), not until a timeout.
-    let waited = turn.saturating_since(zero);
-    assert!(
-        waited >= Duration::from_millis(200) && waited <= Duration::from_millis(850),
-        "the turn started {} ms after the zero drive",
-        waited.total_millis()
-    );
-    assert!((yaw_deg(&h) + 90.0).abs() <= 2.0, "heading {:.2}°", yaw_deg(&h));
 }
 
 #[test]
