@@ -19,8 +19,9 @@
 
 use core::fmt;
 
-/// Where the robot faces; values are the wire's `direction` byte.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+/// Where the robot faces; values are the wire's `direction` byte. Serialised by name (`East`), as
+/// in scenario files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 #[repr(u8)]
 pub enum Heading {
     /// +x (row + 1, down on screen); wire value 0.

@@ -92,7 +92,12 @@ fn physics_round(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> (f64,
     let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
     let frame = crate::grid::GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
     let (x, y) = frame.cell_center(scenario.start.row as usize, scenario.start.col as usize);
-    let mut body = RobotBody::new(scenario, profile, Pose2::new(x, y, scenario.start.heading.angle()), dt);
+    let mut body = RobotBody::new(
+        scenario,
+        profile,
+        Pose2::new(x, y, crate::scenario::world_angle(scenario.start.heading)),
+        dt,
+    );
     let kin = MecanumKinematics::from_profile(profile);
     let pattern = [
         Twist { vx: 0.3, vy: 0.0, omega: 0.0 },

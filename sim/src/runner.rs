@@ -245,7 +245,7 @@ impl Lockstep {
             rows: truth.rows,
             cols: truth.cols,
             start: (start.row, start.col),
-            heading: start.heading.into(),
+            heading: start.heading,
             ..CuteConfig::default()
         })?;
         let max = Instant::from_secs_f64(f64::from(scenario.physics.max_sim_s));

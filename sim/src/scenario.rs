@@ -22,40 +22,18 @@ use serde::{Deserialize, Serialize};
 /// The built-in default room (`explobot run` with no argument).
 pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/default.ron");
 
-/// A compass heading on the grid, as in the link protocol's `direction`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Heading {
-    /// +row, down on the map (world −y).
-    South,
-    /// −row, up on the map (world +y).
-    North,
-    /// −column, left (world −x).
-    West,
-    /// +column, right (world +x).
-    East,
-}
+/// A compass heading on the grid: Cute's, written by name in scenario files (`heading: East`).
+pub use cute::Heading;
 
-impl Heading {
-    /// The world angle of this heading, radians counter-clockwise from `+x`.
-    pub fn angle(self) -> f32 {
-        use std::f32::consts::{FRAC_PI_2, PI};
-        match self {
-            Heading::East => 0.0,
-            Heading::North => FRAC_PI_2,
-            Heading::West => PI,
-            Heading::South => -FRAC_PI_2,
-        }
-    }
-}
-
-impl From<Heading> for cute::Heading {
-    fn from(h: Heading) -> Self {
-        match h {
-            Heading::South => cute::Heading::South,
-            Heading::North => cute::Heading::North,
-            Heading::West => cute::Heading::West,
-            Heading::East => cute::Heading::East,
-        }
+/// The world angle of a grid heading, radians counter-clockwise from `+x`: rows grow down the
+/// map (world −y), columns to the right (world +x).
+pub fn world_angle(heading: Heading) -> f32 {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    match heading {
+        Heading::East => 0.0,
+        Heading::North => FRAC_PI_2,
+        Heading::West => PI,
+        Heading::South => -FRAC_PI_2,
     }
 }
 

@@ -96,7 +96,12 @@ impl Twin {
         let frame = GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
         let (x, y) = frame.cell_center(scenario.start.row as usize, scenario.start.col as usize);
         Twin {
-            body: RobotBody::new(scenario, profile, Pose2::new(x, y, scenario.start.heading.angle()), dt),
+            body: RobotBody::new(
+                scenario,
+                profile,
+                Pose2::new(x, y, crate::scenario::world_angle(scenario.start.heading)),
+                dt,
+            ),
             motor_board: MotorBoard::new(profile),
             sensor_board: SensorBoard::new(profile),
             rng: ChaCha8Rng::seed_from_u64(seed),

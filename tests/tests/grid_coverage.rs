@@ -8,7 +8,6 @@
 use cute::cartography::Cartographer;
 use cute::gridsim::{FakeRobot, World};
 use cute::map::Map;
-use cute::motion::Heading;
 use sim::grid::TruthGrid;
 use sim::scenario::LoadedScenario;
 
@@ -31,8 +30,8 @@ fn cartography_maps_every_reachable_cell_of_every_scenario_room() {
         let n_reachable = reachable.iter().filter(|r| **r).count();
 
         let mut map = Map::new(rows, cols).unwrap();
-        let mut carto = Cartographer::new(rows, cols, start, Heading::from(s.heading)).unwrap();
-        let mut robot = FakeRobot::new(world, start, Heading::from(s.heading));
+        let mut carto = Cartographer::new(rows, cols, start, s.heading).unwrap();
+        let mut robot = FakeRobot::new(world, start, s.heading);
         while let Some(cmd) = carto.next_command(&map) {
             let result = robot.execute(cmd);
             carto.on_result(&mut map, result);
