@@ -381,10 +381,16 @@ impl Motor {
                 tracing::debug!(wait_ms = until.saturating_since(now).total_millis(), "turn waits for rest");
                 Phase::Rest { until }
             }
-            _ => Phase::Active { since: now, sign: self.error(&m, now, s, true).map_or(1.0, sign_of) },
+            _ => self.active_phase(&m, now, s),
         };
         self.current = Some(m);
         self.poll(now, s);
+    }
+
+    /// The Active phase of `m` from `now`, heading for its goal (forwards when the remaining
+    /// error is unknown yet: the Active step itself reports missing readings).
+    fn active_phase(&self, m: &Move, now: Instant, s: &SensorState) -> Phase {
+        Phase::Active { since: now, sign: self.error(m, now, s, true).map_or(1.0, sign_of) }
     }
 
     fn fresh_counts(&self, now: Instant, s: &SensorState) -> Result<[i32; 4], MoveError> {
@@ -505,10 +511,7 @@ impl Motor {
                 if !at_rest {
                     return Step::Continue(Drive::STOP);
                 }
-                let Some(err) = self.error(m, now, s, true) else {
-                    return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
-                };
-                m.phase = Phase::Active { since: now, sign: sign_of(err) };
+                m.phase = self.active_phase(m, now, s);
                 self.step(now, m, s)
             }
             Phase::Active { since, sign } => {

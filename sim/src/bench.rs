@@ -11,7 +11,7 @@ use std::time::Instant as WallInstant;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot_model::kinematics::{MecanumKinematics, rad_s_to_rpm};
-use robot_model::pose::{Pose2, Twist};
+use robot_model::pose::Twist;
 use robot_model::time::{Duration, Instant};
 
 use crate::body::RobotBody;
@@ -44,10 +44,15 @@ pub struct PhysicsFigure {
 }
 
 impl PhysicsFigure {
+    /// Physics steps per wall-clock second of each round.
+    fn rates(&self) -> impl Iterator<Item = f64> + '_ {
+        self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9))
+    }
+
     /// Physics steps per wall-clock second in the median round (the upper middle one for an even
     /// number of rounds).
     pub fn median_steps_per_s(&self) -> f64 {
-        let mut rates: Vec<f64> = self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9)).collect();
+        let mut rates: Vec<f64> = self.rates().collect();
         rates.sort_by(f64::total_cmp);
         rates.get(rates.len() / 2).copied().unwrap_or(0.0)
     }
@@ -55,7 +60,7 @@ impl PhysicsFigure {
     /// Physics steps per wall-clock second in the fastest round (the least disturbed by other
     /// work on the machine).
     pub fn best_steps_per_s(&self) -> f64 {
-        self.wall_s.iter().map(|w| self.steps as f64 / w.max(1e-9)).fold(0.0, f64::max)
+        self.rates().fold(0.0, f64::max)
     }
 
     /// Simulated seconds per wall-clock second at step `dt`, median round.
@@ -90,14 +95,7 @@ fn physics_round(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> (f64,
     let scenario = &loaded.scenario;
     let profile = &loaded.profile;
     let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
-    let frame = crate::grid::GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
-    let (x, y) = frame.cell_center(scenario.start.row as usize, scenario.start.col as usize);
-    let mut body = RobotBody::new(
-        scenario,
-        profile,
-        Pose2::new(x, y, crate::scenario::world_angle(scenario.start.heading)),
-        dt,
-    );
+    let mut body = RobotBody::new(scenario, profile, loaded.start_pose(), dt);
     let kin = MecanumKinematics::from_profile(profile);
     let pattern = [
         Twist { vx: 0.3, vy: 0.0, omega: 0.0 },

@@ -16,6 +16,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
 use serde::{Deserialize, Serialize};
 
@@ -27,7 +28,7 @@ pub use cute::Heading;
 
 /// The world angle of a grid heading, radians counter-clockwise from `+x`: rows grow down the
 /// map (world −y), columns to the right (world +x).
-pub fn world_angle(heading: Heading) -> f32 {
+fn world_angle(heading: Heading) -> f32 {
     use std::f32::consts::{FRAC_PI_2, PI};
     match heading {
         Heading::East => 0.0,
@@ -388,6 +389,16 @@ impl Scenario {
 }
 
 impl LoadedScenario {
+    /// The robot's world pose at the start: the centre of its start cell, facing its start
+    /// heading.
+    pub fn start_pose(&self) -> Pose2 {
+        let frame =
+            crate::grid::GridFrame::for_room(&self.scenario.room, self.scenario.cell_size(&self.profile));
+        let start = self.scenario.start;
+        let (x, y) = frame.cell_center(usize::from(start.row), usize::from(start.col));
+        Pose2::new(x, y, world_angle(start.heading))
+    }
+
     /// Loads a scenario file and the robot profile it names.
     pub fn load(path: &Path) -> Result<LoadedScenario, ScenarioError> {
         let label = path.display().to_string();

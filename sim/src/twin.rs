@@ -8,7 +8,6 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use robot_model::boards::{MotorBoard, SensorBoard, SensorInputs};
-use robot_model::pose::Pose2;
 use robot_model::time::{Duration, Instant};
 use transport::Link;
 
@@ -94,21 +93,16 @@ impl Twin {
         let scenario = &loaded.scenario;
         let profile = &loaded.profile;
         let frame = GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
-        let (x, y) = frame.cell_center(scenario.start.row as usize, scenario.start.col as usize);
+        let start = loaded.start_pose();
         Twin {
-            body: RobotBody::new(
-                scenario,
-                profile,
-                Pose2::new(x, y, crate::scenario::world_angle(scenario.start.heading)),
-                dt,
-            ),
+            body: RobotBody::new(scenario, profile, start, dt),
             motor_board: MotorBoard::new(profile),
             sensor_board: SensorBoard::new(profile),
             rng: ChaCha8Rng::seed_from_u64(seed),
             motor_out: Outbox::default(),
             sensor_out: Outbox::default(),
             frame,
-            trail: vec![(x, y)],
+            trail: vec![(start.x, start.y)],
             steps: 0,
         }
     }
