@@ -46,18 +46,12 @@ impl Client {
 
     /// Reads what arrived; `false` once Carto closed the connection.
     fn poll(&mut self) -> bool {
-        let mut buf = [0u8; 256];
-        loop {
-            match self.link.read(&mut buf) {
-                Ok(0) => return true,
-                Ok(n) => {
-                    for m in self.decoder.feed(&buf[..n]) {
-                        self.received.push(m.expect("Carto sends well-formed frames"));
-                    }
-                }
-                Err(_) => return false,
-            }
+        let mut bytes = Vec::new();
+        let alive = self.link.read_available(&mut bytes).is_ok();
+        for m in self.decoder.feed(&bytes) {
+            self.received.push(m.expect("Carto sends well-formed frames"));
         }
+        alive
     }
 }
 
