@@ -35,7 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut next_print = 0u64;
     let mut buf = [0u8; 1024];
     loop {
-        let now = Instant::from_micros(clock.now_micros());
+        let now = clock.now();
         let dt = now.saturating_since(last).as_secs_f64();
         last = now;
         robot.step(now, dt);

@@ -33,10 +33,10 @@ use robot_model::time::Instant;
 use crate::CartoConfig;
 use crate::motor::{Drive, Motor};
 use crate::pilot::{Health, Pilot, Request};
-use crate::pose::GridPose;
 use crate::sensors::{LineTimer, PeerEvent, SensorEvent, SensorState};
 use crate::ultrasound::Ultrasound;
 use crate::wire;
+use robot_model::grid::GridPose;
 
 /// Counters over Carto's lifetime.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

@@ -6,7 +6,6 @@ pub mod config;
 pub mod motor;
 pub mod odometry;
 pub mod pilot;
-pub mod pose;
 pub mod runtime;
 pub mod sensors;
 pub mod ultrasound;

@@ -131,7 +131,7 @@ fn run(args: Args) -> Result<()> {
     }
 
     let clock = WallClock::start();
-    let now = || Instant::from_micros(clock.now_micros());
+    let now = || clock.now();
     let mut rt = CartoRuntime::new(Carto::new(cfg), listener, motor, sensor);
     let mut next_status = Instant::ZERO;
     let mut failure = None;

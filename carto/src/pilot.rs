@@ -31,14 +31,15 @@
 //! ```
 //! use carto::pilot::{Health, Pilot, Reply, Request};
 //! use carto::{motor::Motor, sensors::SensorState, ultrasound::Ultrasound, CartoConfig};
+//! use robot_model::grid::{Heading, Move};
 //! use robot_model::time::Instant;
 //! let cfg = CartoConfig::default();
 //! let (mut pilot, mut motor) = (Pilot::new(&cfg), Motor::new(cfg.clone()));
 //! let (sensors, us) = (SensorState::default(), Ultrasound::new(30.0, cfg.distance_max_age));
 //! let now = Instant::ZERO;
-//! pilot.handle(now, Request::SetPose { x: 2, y: 3, direction: 3 }, &mut motor);
+//! pilot.handle(now, Request::SetPose { x: 2, y: 3, direction: Ok(Heading::East) }, &mut motor);
 //! // a cartography move without the sensor board cannot run: MOVE_DONE only
-//! pilot.handle(now, Request::Cartography { command: 0 }, &mut motor);
+//! pilot.handle(now, Request::Cartography { command: Ok(Move::Forward) }, &mut motor);
 //! pilot.poll(now, &mut motor, &sensors, &us, Health { sensor_board: false, motor_board: true });
 //! assert_eq!(pilot.take_replies(), vec![Reply::PositionReceived, Reply::MoveDone]);
 //! ```
@@ -49,12 +50,12 @@ use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
 use crate::motor::Motor;
-use crate::pose::{GridPose, Heading};
 use crate::sensors::SensorState;
 use crate::ultrasound::{Check, Ultrasound};
+use robot_model::grid::{GridPose, Heading, Move};
 
-/// A request from Cute, in Carto's terms (raw command and direction bytes are kept so bad values
-/// can be reported).
+/// A request from Cute, in Carto's terms. A command or direction byte that is not a move or a
+/// heading is kept raw (`Err(byte)`) so it can be counted and reported.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Request {
     /// `SEND_ROBOT_POSITION`.
@@ -63,20 +64,20 @@ pub enum Request {
         x: u8,
         /// Column.
         y: u8,
-        /// Raw direction byte (0 S, 1 N, 2 W, 3 E).
-        direction: u8,
+        /// Facing, or the raw byte when it is not a heading.
+        direction: Result<Heading, u8>,
     },
     /// `SEND_MOVE_CARTOGRAPHY`.
     Cartography {
-        /// Raw command byte (0 F, 1 R, 2 L, 3 STOP).
-        command: u8,
+        /// The move, or the raw byte when it is not one (3 STOP, unknown values).
+        command: Result<Move, u8>,
     },
     /// One `SEND_MOVES_TRAJECTORY` frame.
     Trajectory {
         /// Batch length this frame belongs to.
         n_total: u8,
-        /// Raw command byte.
-        command: u8,
+        /// The move, or the raw byte when it is not one.
+        command: Result<Move, u8>,
     },
     /// `STOP_ROBOT`.
     Stop,
@@ -145,14 +146,7 @@ enum TaskKind {
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct Task {
     kind: TaskKind,
-    commands: VecDeque<u8>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum MoveKind {
-    Forward,
-    Right,
-    Left,
+    commands: VecDeque<Result<Move, u8>>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -161,11 +155,11 @@ enum Stage {
     Next,
     /// Waiting (up to `distance_wait`) for fresh encoder and IMU readings before a move: just
     /// after power-on, Cute's first command can arrive before the sensor board's first frames.
-    Waiting { mv: MoveKind, since: Instant },
+    Waiting { mv: Move, since: Instant },
     /// Waiting for a distance reading taken at rest, before a FORWARD.
     Checking { since: Instant },
     /// A move runs on the motor controller.
-    Moving { kind: MoveKind, since: Instant },
+    Moving { kind: Move, since: Instant },
     /// Driving back after a bumper hit.
     BackingOff,
 }
@@ -177,7 +171,7 @@ pub struct Pilot {
     stale_after: Duration,
     back_off: bool,
     pose: Option<GridPose>,
-    batch: Option<(u8, Vec<u8>)>,
+    batch: Option<(u8, Vec<Result<Move, u8>>)>,
     queue: VecDeque<Task>,
     current: Option<Task>,
     stage: Stage,
@@ -235,8 +229,8 @@ impl Pilot {
     pub fn handle(&mut self, now: Instant, req: Request, motor: &mut Motor) {
         match req {
             Request::SetPose { x, y, direction } => {
-                match Heading::from_wire(direction) {
-                    Some(heading) => {
+                match direction {
+                    Ok(heading) => {
                         let pose = GridPose { x, y, heading };
                         tracing::info!(%pose, "robot position received");
                         // A new pose names a cell: the robot is taken to be at its centre. The
@@ -248,7 +242,7 @@ impl Pilot {
                         }
                         self.pose = Some(pose);
                     }
-                    None => {
+                    Err(direction) => {
                         self.counters.bad_values += 1;
                         tracing::warn!(
                             x,
@@ -275,10 +269,10 @@ impl Pilot {
         }
     }
 
-    fn trajectory_frame(&mut self, n_total: u8, command: u8) {
+    fn trajectory_frame(&mut self, n_total: u8, command: Result<Move, u8>) {
         if n_total == 0 {
             self.counters.bad_values += 1;
-            tracing::warn!(command, "trajectory frame with n_total 0 ignored");
+            tracing::warn!(?command, "trajectory frame with n_total 0 ignored");
             return;
         }
         let batch = match self.batch.take() {
@@ -413,14 +407,14 @@ impl Pilot {
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");
                             match motor.start_next_cell(now, sensors).map(|_| ()) {
-                                Ok(()) => self.stage = Stage::Moving { kind: MoveKind::Forward, since: now },
+                                Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
                                 Err(e) => self.fail(now, &e.to_string()),
                             }
                         }
                     }
                 }
                 Stage::Moving { kind, since } => {
-                    if kind == MoveKind::Forward && sensors.bumper_pressed_since(since) {
+                    if kind == Move::Forward && sensors.bumper_pressed_since(since) {
                         self.bumped(now, motor, sensors);
                         continue;
                     }
@@ -460,16 +454,14 @@ impl Pilot {
         &mut self,
         now: Instant,
         kind: TaskKind,
-        command: u8,
+        command: Result<Move, u8>,
         motor: &mut Motor,
         sensors: &SensorState,
         health: Health,
     ) {
         let mv = match command {
-            0 => MoveKind::Forward,
-            1 => MoveKind::Right,
-            2 => MoveKind::Left,
-            other => {
+            Ok(mv) => mv,
+            Err(other) => {
                 self.counters.bad_values += 1;
                 match kind {
                     TaskKind::Cartography => {
@@ -487,7 +479,7 @@ impl Pilot {
         if kind == TaskKind::Cartography && self.pose.is_none() {
             return self.fail(now, "no robot position yet");
         }
-        if mv == MoveKind::Forward && self.pose.is_some_and(|p| p.ahead().is_none()) {
+        if mv == Move::Forward && self.pose.is_some_and(|p| p.ahead().is_none()) {
             return self.fail(now, "the cell ahead is off the grid");
         }
         if !health.motor_board {
@@ -509,30 +501,30 @@ impl Pilot {
         sensors.counts().is_some_and(|c| fresh(c.at)) && sensors.yaw_deg().is_some_and(|y| fresh(y.at))
     }
 
-    fn begin_move(&mut self, now: Instant, mv: MoveKind, motor: &mut Motor, sensors: &SensorState) {
+    fn begin_move(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
         match mv {
-            MoveKind::Forward => self.stage = Stage::Checking { since: now },
-            MoveKind::Right | MoveKind::Left => match motor.start_turn(now, mv == MoveKind::Right, sensors) {
+            Move::Forward => self.stage = Stage::Checking { since: now },
+            Move::Right | Move::Left => match motor.start_turn(now, mv == Move::Right, sensors) {
                 Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
                 Err(e) => self.fail(now, &e.to_string()),
             },
         }
     }
 
-    fn move_succeeded(&mut self, kind: MoveKind) {
+    fn move_succeeded(&mut self, kind: Move) {
         let Some(pose) = self.pose.as_mut() else {
             return;
         };
         match kind {
-            MoveKind::Forward => {
+            Move::Forward => {
                 if let Some((x, y)) = pose.ahead() {
                     pose.x = x;
                     pose.y = y;
                     self.replies.push(Reply::RobotPosition { x, y });
                 }
             }
-            MoveKind::Right => pose.heading = pose.heading.turned_right(),
-            MoveKind::Left => pose.heading = pose.heading.turned_left(),
+            Move::Right => pose.heading = pose.heading.right(),
+            Move::Left => pose.heading = pose.heading.left(),
         }
         tracing::info!(pose = %pose, "move done");
     }

@@ -326,7 +326,7 @@ pub struct LineTimer {
 impl LineTimer {
     /// A timer for a line at `baud` (8N1: ten bits per byte); 0 = arrival time as is.
     pub fn new(baud: u32) -> Self {
-        let byte_micros = if baud == 0 { 0.0 } else { 10.0e6 / f64::from(baud) };
+        let byte_micros = robot_model::time::line_byte_micros(baud);
         LineTimer { byte_micros, last_end: None, burst_start: Instant::ZERO }
     }
 

@@ -15,9 +15,10 @@
 //! assert_eq!(wire::encode_keep_state(258), vec![0x01, 0x03, 0x02, 0x01, 0x02]);
 //! ```
 
-use protocol::link::{Command, Direction, GuiMessage, MsgOrder};
+use protocol::link::{GuiMessage, MsgOrder};
 use protocol::motor::{MotorCommand, MotorPacket};
 use protocol::sensor::{SensorPacket, SensorReading, SensorStatus, SensorValue, SwitchState};
+use robot_model::grid::{Heading, Move};
 
 use crate::motor::Drive;
 use crate::pilot::{Reply, Request};
@@ -30,25 +31,17 @@ pub const KEEP_STATE_STATUS: u8 = 2;
 pub fn request_from(msg: &GuiMessage) -> Request {
     match msg {
         GuiMessage::SendMovesTrajectory { n_total, command } => {
-            Request::Trajectory { n_total: *n_total, command: command_byte(*command) }
+            Request::Trajectory { n_total: *n_total, command: Move::try_from(*command) }
         }
         GuiMessage::SendMoveCartography { command } => {
-            Request::Cartography { command: command_byte(*command) }
+            Request::Cartography { command: Move::try_from(*command) }
         }
         GuiMessage::StopRobot => Request::Stop,
         GuiMessage::SendRobotPosition { x, y, direction } => {
-            Request::SetPose { x: *x, y: *y, direction: direction_byte(*direction) }
+            Request::SetPose { x: *x, y: *y, direction: Heading::try_from(*direction) }
         }
         other => Request::Ignored { msg: u16::from(other.msg_type()) },
     }
-}
-
-fn command_byte(c: Command) -> u8 {
-    u8::from(c)
-}
-
-fn direction_byte(d: Direction) -> u8 {
-    u8::from(d)
 }
 
 /// The link message for a reply.

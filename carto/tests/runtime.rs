@@ -45,7 +45,7 @@ impl World {
 
     fn tick(&mut self) -> carto::StepReport {
         self.now += Duration::from_millis(1);
-        self.clock.set_micros(self.now.total_micros());
+        self.clock.set(Instant::from_micros(self.now.total_micros()));
         self.robot.step(self.now, 0.001);
         let (m, s) = self.robot.emit(self.now);
         // The boards' sides of the links: ignore a closed link (some tests drop Carto's end).

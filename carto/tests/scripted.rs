@@ -99,7 +99,7 @@ fn cartography_right_turns_minus_90_ccw_and_updates_heading() {
     assert!((yaw + 90.0).abs() <= 2.0, "yaw {yaw:.2}°");
     assert!(h.distance_from(0.0, 0.0) < 0.01, "turned in place");
     let pose = h.carto.status().pose.unwrap();
-    assert_eq!(pose.heading, carto::pose::Heading::South);
+    assert_eq!(pose.heading, robot_model::grid::Heading::South);
     // FORWARD now goes south: row + 1
     h.replies.clear();
     h.send(cartography(Command::Forward));
@@ -114,7 +114,7 @@ fn cartography_left_turns_plus_90_ccw() {
     assert!(h.run_until(8000, |h| h.move_done_count() == 1));
     let yaw = yaw_deg(&h);
     assert!((yaw - 90.0).abs() <= 2.0, "yaw {yaw:.2}°");
-    assert_eq!(h.carto.status().pose.unwrap().heading, carto::pose::Heading::North);
+    assert_eq!(h.carto.status().pose.unwrap().heading, robot_model::grid::Heading::North);
 }
 
 #[test]
@@ -460,7 +460,7 @@ fn little_endian_msg_is_accepted_and_answered_big_endian() {
     assert!(c.is_empty(), "pump already moved them");
     assert_eq!(h.reply_msgs(), vec![GuiMessage::RobotPositionReceived]);
     let p = h.carto.status().pose.unwrap();
-    assert_eq!((p.x, p.y, p.heading), (1, 2, carto::pose::Heading::West));
+    assert_eq!((p.x, p.y, p.heading), (1, 2, robot_model::grid::Heading::West));
 }
 
 #[test]
@@ -483,7 +483,7 @@ fn a_frame_split_into_single_bytes_is_reassembled() {
     }
     assert!(h.run_until(8000, |h| h.move_done_count() == 1));
     assert_eq!(h.reply_msgs(), vec![GuiMessage::RobotPositionReceived, GuiMessage::MoveDone]);
-    assert_eq!(h.carto.status().pose.unwrap().heading, carto::pose::Heading::West);
+    assert_eq!(h.carto.status().pose.unwrap().heading, robot_model::grid::Heading::West);
 }
 
 #[test]

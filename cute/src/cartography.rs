@@ -31,14 +31,14 @@
 //! ```
 //! use cute::cartography::{Cartographer, MoveResult};
 //! use cute::map::Map;
-//! use cute::motion::{Command, Heading};
+//! use robot_model::grid::{Heading, Move};
 //! // A 1 x 3 corridor whose last cell is blocked.
 //! let mut map = Map::new(1, 3).unwrap();
 //! map.set_robot(0, 0).unwrap();
 //! let mut carto = Cartographer::new(1, 3, (0, 0), Heading::East).unwrap();
-//! assert_eq!(carto.next_command(&map), Some(Command::Forward));
+//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Moved { x: 0, y: 1 });
-//! assert_eq!(carto.next_command(&map), Some(Command::Forward));
+//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Blocked { x: 0, y: 2 });
 //! assert_eq!(carto.next_command(&map), None); // done
 //! assert_eq!(map.to_text(), "150\n");
@@ -49,8 +49,8 @@ use tracing::{debug, warn};
 
 use crate::astar::{AStar, Grid, TieBreak};
 use crate::map::{CellValue, MAX_SIDE, Map};
-use crate::motion::{Command, Heading, turns_between};
 use crate::trajectory::fill_grid;
+use robot_model::grid::{Heading, Move, turns_between};
 
 /// Cost of entering an unknown cell in a detour, against 1 for a known free cell.
 pub const DEFAULT_UNKNOWN_COST: u8 = 2;
@@ -142,7 +142,7 @@ pub struct Cartographer {
     target: Option<(u8, u8)>,
     /// Remaining cells of the current plan, next cell last.
     plan: Vec<(u8, u8)>,
-    pending: Option<Command>,
+    pending: Option<Move>,
     astar: AStar,
     grid: Grid,
     unknown_cost: u8,
@@ -209,7 +209,7 @@ impl Cartographer {
     }
 
     /// The command sent and not yet answered, if any.
-    pub fn pending(&self) -> Option<Command> {
+    pub fn pending(&self) -> Option<Move> {
         self.pending
     }
 
@@ -276,7 +276,7 @@ impl Cartographer {
     /// The next command to execute, or `None` when the sweep is complete. Until
     /// [`Cartographer::on_result`] is called, it keeps returning the same command (re-send it
     /// after a reconnect).
-    pub fn next_command(&mut self, map: &Map) -> Option<Command> {
+    pub fn next_command(&mut self, map: &Map) -> Option<Move> {
         if let Some(c) = self.pending {
             return Some(c);
         }
@@ -325,12 +325,12 @@ impl Cartographer {
                 continue;
             };
             let cmd = match turns_between(self.heading, want).first() {
-                None => Command::Forward,
+                None => Move::Forward,
                 Some(turn) => *turn,
             };
             self.pending = Some(cmd);
             self.stats.commands += 1;
-            if cmd == Command::Forward {
+            if cmd == Move::Forward {
                 self.stats.forwards += 1;
             } else {
                 self.stats.turns += 1;
@@ -467,7 +467,7 @@ mod tests {
         let map = Map::new(2, 2).unwrap();
         let mut c = Cartographer::new(2, 2, (0, 0), Heading::South).unwrap();
         let first = c.next_command(&map).unwrap();
-        assert_eq!(first, Command::Left); // face EAST towards (0, 1)
+        assert_eq!(first, Move::Left); // face EAST towards (0, 1)
         assert_eq!(c.next_command(&map), Some(first));
         assert_eq!(c.stats().commands, 1);
     }

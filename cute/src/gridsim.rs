@@ -1,7 +1,7 @@
 //! A grid-only stand-in for the robot: no physics, one cell per FORWARD.
 //!
 //! Concept: a [`World`] is the true room, a grid of free and blocked cells the robot cannot see.
-//! A [`FakeRobot`] stands in it and executes [`Command`]s exactly as Carto reports them: a
+//! A [`FakeRobot`] stands in it and executes [`Move`]s exactly as Carto reports them: a
 //! FORWARD into a blocked cell or off the grid is [`MoveResult::Blocked`] with the cell ahead
 //! (no motion), otherwise [`MoveResult::Moved`]; a turn is [`MoveResult::Turned`]. Tests use it to
 //! drive the [`crate::cartography::Cartographer`] and to check coverage against
@@ -12,18 +12,18 @@
 //! ```
 //! use cute::gridsim::{FakeRobot, World};
 //! use cute::cartography::MoveResult;
-//! use cute::motion::{Command, Heading};
+//! use robot_model::grid::{Heading, Move};
 //! let world = World::parse("..#\n...\n").unwrap();
 //! let mut robot = FakeRobot::new(world, (0, 0), Heading::East);
-//! assert_eq!(robot.execute(Command::Forward), MoveResult::Moved { x: 0, y: 1 });
-//! assert_eq!(robot.execute(Command::Forward), MoveResult::Blocked { x: 0, y: 2 });
-//! assert_eq!(robot.execute(Command::Right), MoveResult::Turned);
+//! assert_eq!(robot.execute(Move::Forward), MoveResult::Moved { x: 0, y: 1 });
+//! assert_eq!(robot.execute(Move::Forward), MoveResult::Blocked { x: 0, y: 2 });
+//! assert_eq!(robot.execute(Move::Right), MoveResult::Turned);
 //! assert_eq!(robot.pose(), ((0, 1), Heading::South));
 //! ```
 
 use crate::cartography::MoveResult;
 use crate::map::{MAX_SIDE, MapError};
-use crate::motion::{Command, Heading};
+use robot_model::grid::{Heading, Move};
 
 /// The true room: `rows × cols` cells, each free or blocked.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -141,10 +141,10 @@ impl FakeRobot {
     }
 
     /// Executes one command and reports it the way Carto would.
-    pub fn execute(&mut self, command: Command) -> MoveResult {
+    pub fn execute(&mut self, command: Move) -> MoveResult {
         self.moves += 1;
         match command {
-            Command::Forward => match self.heading.step(self.pose, self.world.rows, self.world.cols) {
+            Move::Forward => match self.heading.step(self.pose, self.world.rows, self.world.cols) {
                 Some(n) if !self.world.is_blocked(usize::from(n.0), usize::from(n.1)) => {
                     self.pose = n;
                     MoveResult::Moved { x: n.0, y: n.1 }

@@ -64,9 +64,9 @@ use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 pub use bevy_egui;
 
 use crate::map::CellValue;
-use crate::motion::Heading;
 use crate::session::{Compat, Cute, CuteEvent, Status};
 use crate::trajectory::PlanError;
+use robot_model::grid::Heading;
 
 /// Height of the toolbar at the top of the [`CuteView`], logical pixels.
 pub const TOOLBAR_HEIGHT: f32 = 64.0;
@@ -667,8 +667,8 @@ fn cute_toolbar<R: CuteAccess>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::Command;
     use crate::session::Waiting;
+    use robot_model::grid::Move;
 
     #[test]
     fn layout_fits_map_inside_region_below_toolbar() {
@@ -745,7 +745,7 @@ mod tests {
         let p = popup_for(&CuteEvent::ObstacleMet { x: 3, y: 4 }).unwrap();
         assert!(p.text.contains("(3, 4)"));
         assert!(popup_for(&CuteEvent::MoveTimeout { waiting_for: Waiting::MoveDone }).is_some());
-        assert!(popup_for(&CuteEvent::MoveRejected { command: Command::Forward }).is_some());
+        assert!(popup_for(&CuteEvent::MoveRejected { command: Move::Forward }).is_some());
         assert!(popup_for(&CuteEvent::Connected).is_none());
         assert!(popup_for(&CuteEvent::Reached { x: 0, y: 0 }).is_none());
         assert!(popup_for(&CuteEvent::ProtocolError { message: "x".into(), fatal: false }).is_none());

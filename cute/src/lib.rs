@@ -6,13 +6,11 @@ pub mod gridsim;
 #[cfg(feature = "window")]
 pub mod gui;
 pub mod map;
-pub mod motion;
 pub mod session;
 pub mod trajectory;
 
 pub use astar::{AStar, Grid, Path, TieBreak};
 pub use cartography::{Cartographer, MoveResult};
 pub use map::{CellValue, Map, MapError};
-pub use motion::{Command, Heading};
 pub use session::{Compat, Cute, CuteConfig, CuteError, CuteEvent, Status};
 pub use trajectory::{PlanError, Planner, Trajectory};

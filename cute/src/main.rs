@@ -7,7 +7,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result};
 use bevy::app::{App, AppExit, Startup, Update};
 use bevy::ecs::system::{Res, ResMut};
 use bevy::prelude::{ClearColor, Resource};
@@ -15,7 +15,8 @@ use clap::Parser;
 use cute::gui::{
     AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, continuous_updates, setup_camera, window_plugins,
 };
-use cute::{Compat, Cute, CuteConfig, Heading};
+use cute::{Compat, Cute, CuteConfig};
+use robot_model::grid::Heading;
 use robot_model::time::Instant;
 use transport::{Clock, Connector, Link, TcpConnector, TcpLink, WallClock};
 
@@ -45,7 +46,7 @@ struct Cli {
     start_col: u8,
     /// The robot's starting heading: north, south, east or west.
     #[arg(long, default_value = "east")]
-    heading: String,
+    heading: Heading,
     /// Start cartography as soon as Carto acknowledges the position (demos, screenshots).
     #[arg(long)]
     cartography: bool,
@@ -80,7 +81,7 @@ impl CuteAccess for Remote {
 
 impl Remote {
     fn now(&self) -> Instant {
-        Instant::from_micros(self.clock.now_micros())
+        self.clock.now()
     }
 
     fn drop_link(&mut self, now: Instant) {
@@ -166,16 +167,6 @@ fn screenshot_when_due(remote: Res<Remote>, after: Res<ScreenshotAfter>, mut sho
 #[derive(Resource)]
 struct ScreenshotAfter(f64);
 
-fn parse_heading(s: &str) -> Result<Heading> {
-    Ok(match s.to_ascii_lowercase().as_str() {
-        "north" | "n" => Heading::North,
-        "south" | "s" => Heading::South,
-        "east" | "e" => Heading::East,
-        "west" | "w" => Heading::West,
-        other => bail!("unknown heading {other:?} (expected north, south, east or west)"),
-    })
-}
-
 fn run(cli: Cli) -> Result<ExitCode> {
     let compat = match cli.compat.as_deref() {
         Some(name) => name.parse::<Compat>()?,
@@ -185,7 +176,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         rows: cli.rows,
         cols: cli.cols,
         start: (cli.start_row, cli.start_col),
-        heading: parse_heading(&cli.heading)?,
+        heading: cli.heading,
         compat,
         ..CuteConfig::default()
     })

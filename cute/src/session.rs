@@ -42,7 +42,7 @@
 //!
 //! ```
 //! use cute::session::{Cute, CuteConfig, Status};
-//! use cute::motion::Heading;
+//! use robot_model::grid::Heading;
 //! use robot_model::time::Instant;
 //! let mut cute = Cute::new(CuteConfig { rows: 4, cols: 4, start: (0, 0), heading: Heading::East,
 //!     ..CuteConfig::default() }).unwrap();
@@ -65,8 +65,8 @@ use tracing::{debug, info, warn};
 
 use crate::cartography::{CartoError, Cartographer, MoveResult};
 use crate::map::{CellValue, Map, MapError};
-use crate::motion::{Command, Heading};
 use crate::trajectory::{PlanError, Planner};
+use robot_model::grid::{Heading, Move};
 
 /// First reconnect delay after a disconnect.
 pub const RECONNECT_MIN: Duration = Duration::from_millis(250);
@@ -240,7 +240,7 @@ pub enum CuteEvent {
     /// stopped.
     MoveRejected {
         /// The refused command.
-        command: Command,
+        command: Move,
     },
     /// The user pressed STOP.
     Stopped,
@@ -291,7 +291,7 @@ enum LinkState {
 
 #[derive(Debug, Clone)]
 struct CartoFlight {
-    command: Command,
+    command: Move,
     deadline: Instant,
     result: Option<MoveResult>,
 }
@@ -311,7 +311,7 @@ struct BatchFlight {
 enum Mission {
     None,
     Mapping { carto: Box<Cartographer>, flight: Option<CartoFlight>, rejected: u32 },
-    Moving { dest: (u8, u8), batches: VecDeque<Vec<Command>>, flight: Option<BatchFlight>, replan: bool },
+    Moving { dest: (u8, u8), batches: VecDeque<Vec<Move>>, flight: Option<BatchFlight>, replan: bool },
 }
 
 /// The Cute side of the link: map, robot, missions and the protocol state machine.
@@ -603,7 +603,7 @@ impl Cute {
             return Ok(());
         }
         let max = if self.config.compat == Compat::Explobot2024 { MAX_BATCH_COMPAT } else { MAX_BATCH };
-        let batches = t.commands.chunks(max).map(<[Command]>::to_vec).collect();
+        let batches = t.commands.chunks(max).map(<[Move]>::to_vec).collect();
         self.mission = Mission::Moving { dest: (x, y), batches, flight: None, replan: false };
         self.status = Status::Moving;
         self.pump();
@@ -655,7 +655,7 @@ impl Cute {
         let msg = GuiMessage::SendRobotPosition {
             x: self.robot.0,
             y: self.robot.1,
-            direction: link::Direction::from(self.heading.as_u8()),
+            direction: self.heading.into(),
         };
         self.send(&msg);
     }
@@ -685,7 +685,7 @@ impl Cute {
                     Some(command) => {
                         *flight = Some(CartoFlight { command, deadline: now + timeout, result: None });
                         self.counters.moves_sent += 1;
-                        let msg = GuiMessage::SendMoveCartography { command: to_wire(command) };
+                        let msg = GuiMessage::SendMoveCartography { command: command.into() };
                         self.send(&msg);
                     }
                     None => {
@@ -718,7 +718,7 @@ impl Cute {
                             } else {
                                 MAX_BATCH
                             };
-                            *batches = t.commands.chunks(max).map(<[Command]>::to_vec).collect();
+                            *batches = t.commands.chunks(max).map(<[Move]>::to_vec).collect();
                         }
                         Err(e) => {
                             warn!(error = %e, "cannot resume the trajectory");
@@ -734,7 +734,7 @@ impl Cute {
                 };
                 if self.config.compat == Compat::Explobot2024 {
                     // Fire and forget: the original Carto never answers a trajectory.
-                    let all: Vec<Vec<Command>> = batches.drain(..).collect();
+                    let all: Vec<Vec<Move>> = batches.drain(..).collect();
                     let n: usize = all.iter().map(Vec::len).sum();
                     for batch in &all {
                         self.send_batch(batch);
@@ -772,12 +772,12 @@ impl Cute {
         }
     }
 
-    fn send_batch(&mut self, batch: &[Command]) {
+    fn send_batch(&mut self, batch: &[Move]) {
         // Batches are at most 255 long (chunks of MAX_BATCH or less).
         let n_total = batch.len().min(MAX_BATCH) as u8;
         for &c in batch {
             self.counters.moves_sent += 1;
-            self.send(&GuiMessage::SendMovesTrajectory { n_total, command: to_wire(c) });
+            self.send(&GuiMessage::SendMovesTrajectory { n_total, command: c.into() });
         }
     }
 
@@ -912,7 +912,7 @@ impl Cute {
 fn apply_carto_result(
     carto: &mut Cartographer,
     map: &mut Map,
-    command: Command,
+    command: Move,
     result: MoveResult,
     robot: &mut (u8, u8),
     heading: &mut Heading,
@@ -946,11 +946,11 @@ fn apply_carto_result(
 }
 
 /// The `(cell, heading)` after each FORWARD of `commands`, and the final pose.
-fn simulate(start: Pose, commands: &[Command], rows: usize, cols: usize) -> (Vec<Pose>, Pose) {
+fn simulate(start: Pose, commands: &[Move], rows: usize, cols: usize) -> (Vec<Pose>, Pose) {
     let (mut cell, mut h) = start;
     let mut steps = Vec::new();
     for &c in commands {
-        if c == Command::Forward {
+        if c == Move::Forward {
             cell = h.step(cell, rows, cols).unwrap_or(cell);
             steps.push((cell, h));
         } else {
@@ -958,38 +958,4 @@ fn simulate(start: Pose, commands: &[Command], rows: usize, cols: usize) -> (Vec
         }
     }
     (steps, (cell, h))
-}
-
-fn to_wire(c: Command) -> link::Command {
-    link::Command::from(c.as_u8())
-}
-
-impl From<Command> for link::Command {
-    fn from(c: Command) -> link::Command {
-        to_wire(c)
-    }
-}
-
-impl From<Heading> for link::Direction {
-    fn from(h: Heading) -> link::Direction {
-        link::Direction::from(h.as_u8())
-    }
-}
-
-impl TryFrom<link::Direction> for Heading {
-    type Error = u8;
-    /// Fails with the raw value for an unknown direction.
-    fn try_from(d: link::Direction) -> Result<Heading, u8> {
-        let v = u8::from(d);
-        Heading::from_u8(v).ok_or(v)
-    }
-}
-
-impl TryFrom<link::Command> for Command {
-    type Error = u8;
-    /// Fails with the raw value for STOP and unknown commands.
-    fn try_from(c: link::Command) -> Result<Command, u8> {
-        let v = u8::from(c);
-        Command::from_u8(v).ok_or(v)
-    }
 }

@@ -20,7 +20,7 @@
 //!
 //! ```
 //! use cute::map::Map;
-//! use cute::motion::{Command, Heading};
+//! use robot_model::grid::{Heading, Move};
 //! use cute::trajectory::Planner;
 //! let mut map = Map::parse("5111\n0201\n0001\n0004\n").unwrap();
 //! let t = Planner::new().plan_on_map(&mut map, (0, 0), Heading::East, (3, 3)).unwrap();
@@ -33,7 +33,7 @@ use thiserror::Error;
 
 use crate::astar::{AStar, Grid, TieBreak};
 use crate::map::{CellValue, Map};
-use crate::motion::{Command, Heading, turns_between};
+use robot_model::grid::{Heading, Move, turns_between};
 
 /// Why no trajectory could be planned.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
@@ -96,13 +96,13 @@ pub struct Trajectory {
     /// Every cell `(x, y)` from the robot's cell (first) to the destination (last).
     pub path: Vec<(u8, u8)>,
     /// Turns and FORWARDs, in order.
-    pub commands: Vec<Command>,
+    pub commands: Vec<Move>,
     /// The robot's heading after the last command.
     pub final_heading: Heading,
 }
 
 /// The commands that drive `path` (start cell first) from `heading`, and the final heading.
-pub fn commands_for_path(path: &[(u8, u8)], heading: Heading) -> Result<(Vec<Command>, Heading), PlanError> {
+pub fn commands_for_path(path: &[(u8, u8)], heading: Heading) -> Result<(Vec<Move>, Heading), PlanError> {
     let mut commands = Vec::with_capacity(path.len() * 2);
     let mut h = heading;
     for w in path.windows(2) {
@@ -113,7 +113,7 @@ pub fn commands_for_path(path: &[(u8, u8)], heading: Heading) -> Result<(Vec<Com
             to_y: w[1].1,
         })?;
         commands.extend_from_slice(turns_between(h, want));
-        commands.push(Command::Forward);
+        commands.push(Move::Forward);
         h = want;
     }
     Ok((commands, h))
@@ -241,15 +241,15 @@ pub fn paint(map: &mut Map, t: &Trajectory) {
 mod tests {
     use super::*;
 
-    fn nums(c: &[Command]) -> Vec<u8> {
+    fn nums(c: &[Move]) -> Vec<u8> {
         c.iter().map(|c| c.as_u8()).collect()
     }
 
     /// Replays commands on the map, checking every FORWARD enters a known free cell.
-    fn replay(map: &Map, from: (u8, u8), heading: Heading, cmds: &[Command]) -> ((u8, u8), Heading) {
+    fn replay(map: &Map, from: (u8, u8), heading: Heading, cmds: &[Move]) -> ((u8, u8), Heading) {
         let (mut pos, mut h) = (from, heading);
         for c in cmds {
-            if *c == Command::Forward {
+            if *c == Move::Forward {
                 pos = h.step(pos, map.rows(), map.cols()).unwrap();
                 assert!(map.at(pos).unwrap().is_known_free(), "drove into {:?}", pos);
             } else {

@@ -10,8 +10,8 @@
 use cute::cartography::{Cartographer, MoveResult};
 use cute::gridsim::{FakeRobot, World};
 use cute::map::{CellValue, Map};
-use cute::motion::{Command, Heading};
 use proptest::prelude::*;
+use robot_model::grid::{Heading, Move};
 
 /// Upper bound on commands per cell to learn (reachable cells plus the obstacle cells next to
 /// them, which can only be learnt by bumping). Measured over 3000 random rooms up to 11 x 11
@@ -56,7 +56,7 @@ fn run_world(name: &str, world: World, start: (u8, u8), heading: Heading) -> Rep
     // Hard stop far above any sane bound, so a livelock fails instead of hanging.
     let limit = 50 * (rows * cols) as u64 + 100;
     while let Some(cmd) = carto.next_command(&map) {
-        if cmd == Command::Forward {
+        if cmd == Move::Forward {
             let ahead = carto.heading().step(carto.pose(), rows, cols);
             let ahead = ahead.expect("never drives off the map");
             assert_ne!(map.at(ahead), Some(CellValue::Obstacle), "{name}: drove into a known obstacle");
@@ -247,8 +247,8 @@ fn cartography_results_match_the_map_values() {
         trace.push((cmd, r));
         carto.on_result(&mut map, r);
     }
-    assert_eq!(trace[0], (Command::Forward, MoveResult::Moved { x: 0, y: 1 }));
-    assert_eq!(trace[1], (Command::Forward, MoveResult::Blocked { x: 0, y: 2 }));
+    assert_eq!(trace[0], (Move::Forward, MoveResult::Moved { x: 0, y: 1 }));
+    assert_eq!(trace[1], (Move::Forward, MoveResult::Blocked { x: 0, y: 2 }));
     assert_eq!(map.get(0, 2), Some(CellValue::Obstacle));
     assert_eq!(map.count(CellValue::Unknown), 0);
     assert_eq!(map.count(CellValue::Robot), 1);

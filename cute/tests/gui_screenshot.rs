@@ -17,8 +17,9 @@ use cute::gui::{
     AutoScreenshot, BACKGROUND, CutePlugin, CuteSession, CuteView, MapLayout, cell_rgb, continuous_updates,
     setup_camera, window_plugins,
 };
-use cute::{CellValue, Command, Cute, CuteConfig, Heading, MoveResult, Status};
+use cute::{CellValue, Cute, CuteConfig, MoveResult, Status};
 use protocol::link::{Decoder, GuiMessage, MsgOrder};
+use robot_model::grid::{Heading, Move};
 use robot_model::time::Instant;
 
 const ROOM: &str = "
@@ -47,7 +48,7 @@ fn serve(cute: &mut Cute, robot: &mut FakeRobot, mut done: impl FnMut(&Cute) -> 
             match msg.unwrap() {
                 GuiMessage::SendRobotPosition { .. } => reply.push(GuiMessage::RobotPositionReceived),
                 GuiMessage::SendMoveCartography { command } => {
-                    let command = Command::try_from(command).unwrap();
+                    let command = Move::try_from(command).unwrap();
                     match robot.execute(command) {
                         MoveResult::Moved { x, y } => reply.push(GuiMessage::SetRobotPosition { x, y }),
                         MoveResult::Blocked { x, y } => reply.push(GuiMessage::SetObstaclePosition { x, y }),

@@ -8,10 +8,10 @@
 
 use cute::gridsim::World;
 use cute::map::CellValue;
-use cute::motion::{Command, Heading};
 use cute::session::{Compat, Cute, CuteConfig, CuteEvent, MAX_BATCH_COMPAT, RECONNECT_MAX, Status, Waiting};
 use cute::trajectory::PlanError;
 use protocol::link::{self, Decoder, GuiMessage, MsgOrder};
+use robot_model::grid::{Heading, Move};
 use robot_model::time::{Duration, Instant};
 
 /// Carto's behaviour on a grid world.
@@ -20,7 +20,7 @@ struct ScriptedCarto {
     pose: Option<((u8, u8), Heading)>,
     decoder: Decoder,
     out: Vec<u8>,
-    batch: Vec<Command>,
+    batch: Vec<Move>,
     /// Like the original: ROBOT_POSITION_RECEIVED before every cartography move.
     unsolicited_rpr: bool,
     /// Answer trajectories with positions and MOVE_DONE (our Carto) or silently (the original).
@@ -50,12 +50,12 @@ impl ScriptedCarto {
     }
 
     /// One FORWARD or turn; returns false if a FORWARD met an obstacle.
-    fn execute(&mut self, c: Command) -> bool {
+    fn execute(&mut self, c: Move) -> bool {
         let Some((cell, h)) = self.pose else {
             return true;
         };
         match c {
-            Command::Forward => {
+            Move::Forward => {
                 let ahead = h.step(cell, self.world.rows(), self.world.cols());
                 match ahead {
                     Some(n) if !self.world.is_blocked(n.0.into(), n.1.into()) => {
@@ -96,13 +96,13 @@ impl ScriptedCarto {
                     if self.unsolicited_rpr {
                         self.reply(GuiMessage::RobotPositionReceived);
                     }
-                    if let Ok(c) = Command::try_from(command) {
+                    if let Ok(c) = Move::try_from(command) {
                         self.execute(c);
                     }
                     self.reply(GuiMessage::MoveDone);
                 }
                 GuiMessage::SendMovesTrajectory { n_total, command } => {
-                    if let Ok(c) = Command::try_from(command) {
+                    if let Ok(c) = Move::try_from(command) {
                         self.batch.push(c);
                     }
                     if self.batch.len() == usize::from(n_total) {

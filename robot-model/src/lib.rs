@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod boards;
+pub mod grid;
 pub mod kinematics;
 pub mod motor;
 pub mod pose;

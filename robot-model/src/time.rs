@@ -188,6 +188,19 @@ impl From<core::time::Duration> for Duration {
     }
 }
 
+/// Bits a byte takes on an 8N1 UART line: start bit, eight data bits, stop bit.
+pub const BITS_PER_BYTE: u32 = 10;
+
+/// Bytes per second an 8N1 line at `baud` carries.
+pub fn line_bytes_per_sec(baud: u32) -> f64 {
+    f64::from(baud) / f64::from(BITS_PER_BYTE)
+}
+
+/// Microseconds one byte takes on an 8N1 line at `baud`; 0 for a baud rate of 0 (no timing).
+pub fn line_byte_micros(baud: u32) -> f64 {
+    if baud == 0 { 0.0 } else { 1.0e6 * f64::from(BITS_PER_BYTE) / f64::from(baud) }
+}
+
 impl fmt::Display for Instant {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}.{:06}s", self.micros / 1_000_000, self.micros % 1_000_000)
@@ -218,5 +231,12 @@ mod tests {
         assert_eq!(Duration::from_secs_f64(-1.0), Duration::ZERO);
         assert_eq!(Duration::from_secs_f64(f64::NAN), Duration::ZERO);
         assert_eq!(Instant::from_secs_f64(1.5).to_string(), "1.500000s");
+    }
+
+    #[test]
+    fn line_rates_count_ten_bits_per_byte() {
+        assert_eq!(line_bytes_per_sec(9600), 960.0);
+        assert_eq!(line_byte_micros(115_200), 1.0e7 / 115_200.0);
+        assert_eq!(line_byte_micros(0), 0.0);
     }
 }

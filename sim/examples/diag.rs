@@ -18,12 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if last != Some((x, y, h)) || c != collisions {
             let p = run.body().pose();
             let (cx, cy) = run.frame().cell_center(x as usize, y as usize);
-            let want = match h {
-                cute::Heading::East => 0.0f32,
-                cute::Heading::North => 90.0,
-                cute::Heading::West => 180.0,
-                cute::Heading::South => -90.0,
-            };
+            let want = h.world_angle().to_degrees();
             let mut err = p.theta.to_degrees() - want;
             while err > 180.0 {
                 err -= 360.0;

@@ -7,61 +7,21 @@
 
 use std::collections::VecDeque;
 
+use rapier2d::parry::bounding_volume::Aabb;
 use rapier2d::parry::math::{Pose, Vector};
 use rapier2d::parry::query;
 use rapier2d::parry::shape::{Ball, ConvexPolygon, Cuboid, Segment, Shape};
+pub use rapier2d::parry::utils::point_in_poly2d;
 use robot_model::profile::RobotProfile;
 
 use crate::scenario::{Obstacle, Scenario};
 
-/// Largest grid side: coordinates travel as one byte on the link protocol.
-pub const MAX_CELLS: usize = 256;
+pub use robot_model::grid::{GridFrame, MAX_CELLS};
 
-/// Where the grid sits in the world.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GridFrame {
-    /// World x of the left edge of column 0.
-    pub left: f32,
-    /// World y of the top edge of row 0.
-    pub top: f32,
-    /// Cell side, metres.
-    pub cell: f32,
-    /// Number of rows.
-    pub rows: usize,
-    /// Number of columns.
-    pub cols: usize,
-}
-
-impl GridFrame {
-    /// The grid for `room` (a polygon) with cells of `cell` metres.
-    pub fn for_room(room: &[(f32, f32)], cell: f32) -> GridFrame {
-        // Scenario validation rejects rooms wider than MAX_CELLS cells; the clamp below only
-        // keeps the arithmetic sane for callers that skip it.
-        let (min_x, min_y, max_x, max_y) = bounds(room);
-        let width = (max_x - min_x).max(0.0);
-        let height = (max_y - min_y).max(0.0);
-        let cols = ((width / cell + 1e-4).floor() as usize).min(MAX_CELLS);
-        let rows = ((height / cell + 1e-4).floor() as usize).min(MAX_CELLS);
-        let margin_x = (width - cols as f32 * cell) * 0.5;
-        let margin_y = (height - rows as f32 * cell) * 0.5;
-        GridFrame { left: min_x + margin_x, top: max_y - margin_y, cell, rows, cols }
-    }
-
-    /// World coordinates of the centre of (row, col).
-    pub fn cell_center(&self, row: usize, col: usize) -> (f32, f32) {
-        (self.left + (col as f32 + 0.5) * self.cell, self.top - (row as f32 + 0.5) * self.cell)
-    }
-
-    /// The cell containing world point (x, y), if it is on the grid.
-    pub fn cell_at(&self, x: f32, y: f32) -> Option<(usize, usize)> {
-        let col = ((x - self.left) / self.cell).floor();
-        let row = ((self.top - y) / self.cell).floor();
-        if col < 0.0 || row < 0.0 {
-            return None;
-        }
-        let (row, col) = (row as usize, col as usize);
-        (row < self.rows && col < self.cols).then_some((row, col))
-    }
+/// The planning grid over `room`'s bounding box with cells of `cell` metres.
+pub fn room_frame(room: &[(f32, f32)], cell: f32) -> GridFrame {
+    let aabb = room_aabb(room);
+    GridFrame::for_bounds((aabb.mins.x, aabb.mins.y), (aabb.maxs.x, aabb.maxs.y), cell)
 }
 
 /// Which cells of the grid are free in the real room.
@@ -79,7 +39,8 @@ pub struct TruthGrid {
 impl TruthGrid {
     /// Rasterises the scenario's room and obstacles.
     pub fn build(scenario: &Scenario, profile: &RobotProfile) -> TruthGrid {
-        let frame = GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
+        let frame = room_frame(&scenario.room, scenario.cell_size(profile));
+        let room = room_points(&scenario.room);
         let shapes: Vec<(Pose, Box<dyn Shape>)> =
             scenario.obstacles.iter().filter_map(obstacle_shape).collect();
         let walls: Vec<Segment> = room_edges(&scenario.room).collect();
@@ -98,7 +59,7 @@ impl TruthGrid {
                 let at = Pose::from_translation(Vector::new(cx, cy));
                 let inside = [(-half, -half), (half, -half), (half, half), (-half, half)]
                     .iter()
-                    .all(|&(dx, dy)| point_in_polygon(&scenario.room, cx + dx, cy + dy));
+                    .all(|&(dx, dy)| point_in_poly2d(Vector::new(cx + dx, cy + dy), &room));
                 let crosses_wall = walls.iter().any(|w| intersects(&at, &square, &identity, w));
                 let hits_obstacle = shapes.iter().any(|(pose, s)| intersects(&at, &closed, pose, s.as_ref()));
                 free.push(inside && !crosses_wall && !hits_obstacle);
@@ -138,17 +99,26 @@ fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
     query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
 }
 
-/// A polygon's bounding box: (min x, min y, max x, max y), metres.
+/// A polygon's bounding box (empty polygon: `mins` above `maxs`).
+pub fn room_aabb(room: &[(f32, f32)]) -> Aabb {
+    Aabb::from_points(room.iter().map(|&(x, y)| Vector::new(x, y)))
+}
+
+/// A polygon's bounding box as (min x, min y, max x, max y), metres.
 pub fn bounds(room: &[(f32, f32)]) -> (f32, f32, f32, f32) {
-    room.iter().fold((f32::MAX, f32::MAX, f32::MIN, f32::MIN), |(a, b, c, d), &(x, y)| {
-        (a.min(x), b.min(y), c.max(x), d.max(y))
-    })
+    let aabb = room_aabb(room);
+    (aabb.mins.x, aabb.mins.y, aabb.maxs.x, aabb.maxs.y)
 }
 
 /// Width and height of a polygon's bounding box, metres.
 pub fn room_extent(room: &[(f32, f32)]) -> (f32, f32) {
-    let (min_x, min_y, max_x, max_y) = bounds(room);
-    ((max_x - min_x).max(0.0), (max_y - min_y).max(0.0))
+    let aabb = room_aabb(room);
+    ((aabb.maxs.x - aabb.mins.x).max(0.0), (aabb.maxs.y - aabb.mins.y).max(0.0))
+}
+
+/// A polygon's corners as parry points, for [`point_in_poly2d`].
+pub fn room_points(room: &[(f32, f32)]) -> Vec<Vector> {
+    room.iter().map(|&(x, y)| Vector::new(x, y)).collect()
 }
 
 /// The room polygon's edges as segments.
@@ -181,22 +151,6 @@ pub fn obstacle_shape(o: &Obstacle) -> Option<(Pose, Box<dyn Shape>)> {
     }
 }
 
-/// Even-odd point-in-polygon test.
-pub fn point_in_polygon(poly: &[(f32, f32)], x: f32, y: f32) -> bool {
-    let mut inside = false;
-    let n = poly.len();
-    let mut j = n.wrapping_sub(1);
-    for i in 0..n {
-        let (xi, yi) = poly[i];
-        let (xj, yj) = poly[j];
-        if (yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi {
-            inside = !inside;
-        }
-        j = i;
-    }
-    inside
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -212,6 +166,7 @@ mod tests {
 
     #[test]
     fn grid_is_centred_in_the_room_with_whole_cells() {
+        // The frame itself is tested in robot_model::grid; here, that the room's truth uses it.
         let s = scenario("");
         let g = TruthGrid::build(&s, &RobotProfile::default());
         assert_eq!((g.rows, g.cols), (3, 4));

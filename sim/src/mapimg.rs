@@ -10,7 +10,7 @@ use rapier2d::parry::math::Vector;
 use rapier2d::parry::query::PointQuery;
 use rapier2d::parry::shape::Shape;
 
-use crate::grid::{GridFrame, bounds, obstacle_shape, point_in_polygon};
+use crate::grid::{GridFrame, bounds, obstacle_shape, point_in_poly2d, room_points};
 use crate::scenario::Scenario;
 
 /// Pixels per metre for rooms up to ~25 m; larger rooms are scaled down to fit [`MAX_SIDE`].
@@ -53,10 +53,11 @@ impl MapPicture<'_> {
         let to_px =
             |x: f32, y: f32| ((x - min_x) * scale + BORDER as f32, (max_y - y) * scale + BORDER as f32);
         let shapes: Vec<_> = self.scenario.obstacles.iter().filter_map(obstacle_shape).collect();
+        let room = room_points(&self.scenario.room);
         let mut img = RgbImage::new(w.max(1), h.max(1));
         for (px, py, pixel) in img.enumerate_pixels_mut() {
             let (x, y) = to_world(px, py);
-            let mut c = if !point_in_polygon(&self.scenario.room, x, y) {
+            let mut c = if !point_in_poly2d(Vector::new(x, y), &room) {
                 [90, 90, 90]
             } else if shapes.iter().any(|(pose, s)| contains(pose, s.as_ref(), x, y)) {
                 [20, 20, 20]

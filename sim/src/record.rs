@@ -15,25 +15,10 @@ use sha2::{Digest, Sha256};
 /// Recording format version; bumped when the layout changes.
 pub const FORMAT_VERSION: u32 = 1;
 
-/// Which way bytes went, seen from the endpoint that recorded them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Dir {
-    /// Bytes the endpoint read.
-    Read,
-    /// Bytes the endpoint wrote.
-    Write,
-}
-
-/// One burst of bytes at one time.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Chunk {
-    /// Run time, µs.
-    pub micros: u64,
-    /// Read or written.
-    pub dir: Dir,
-    /// The bytes.
-    pub bytes: Vec<u8>,
-}
+/// Which way bytes went, seen from the endpoint that recorded them (transport's tracer type).
+pub use transport::Direction as Dir;
+/// One burst of bytes at one time: the tracer's record, stored as it is.
+pub use transport::TraceRecord as Chunk;
 
 /// All traffic at one endpoint of one link (e.g. `motor` at `carto`).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -143,8 +128,8 @@ pub fn hash_logs(logs: &[EndpointLog]) -> String {
         h.update(log.endpoint.as_bytes());
         h.update([0]);
         for c in &log.chunks {
-            h.update(c.micros.to_le_bytes());
-            h.update([matches!(c.dir, Dir::Write) as u8]);
+            h.update(c.at.total_micros().to_le_bytes());
+            h.update([matches!(c.direction, Dir::Written) as u8]);
             h.update((c.bytes.len() as u64).to_le_bytes());
             h.update(&c.bytes);
         }
@@ -205,7 +190,7 @@ pub fn first_divergence(recorded: &[EndpointLog], replayed: &[EndpointLog]) -> O
     for (link, endpoint) in all {
         let a = chunks_of(recorded, &link, &endpoint).unwrap_or(&empty);
         let b = chunks_of(replayed, &link, &endpoint).unwrap_or(&empty);
-        for dir in [Dir::Read, Dir::Write] {
+        for dir in [Dir::Read, Dir::Written] {
             let sa = flatten(a, dir);
             let sb = flatten(b, dir);
             let n = sa.len().max(sb.len());
@@ -237,7 +222,11 @@ fn chunks_of<'a>(logs: &'a [EndpointLog], link: &str, endpoint: &str) -> Option<
 }
 
 fn flatten(chunks: &[Chunk], dir: Dir) -> Vec<(u64, u8)> {
-    chunks.iter().filter(|c| c.dir == dir).flat_map(|c| c.bytes.iter().map(move |&b| (c.micros, b))).collect()
+    chunks
+        .iter()
+        .filter(|c| c.direction == dir)
+        .flat_map(|c| c.bytes.iter().map(move |&b| (c.at.total_micros(), b)))
+        .collect()
 }
 
 #[cfg(test)]
@@ -250,24 +239,28 @@ mod tests {
             endpoint: "carto".into(),
             chunks: chunks
                 .into_iter()
-                .map(|(micros, dir, b)| Chunk { micros, dir, bytes: b.to_vec() })
+                .map(|(micros, direction, b)| Chunk {
+                    at: robot_model::time::Instant::from_micros(micros),
+                    direction,
+                    bytes: b.to_vec(),
+                })
                 .collect(),
         }]
     }
 
     #[test]
     fn identical_logs_do_not_diverge_and_hash_equal() {
-        let a = log(vec![(0, Dir::Write, &[0xAA, 0x01]), (500, Dir::Read, &[1, 2, 3])]);
+        let a = log(vec![(0, Dir::Written, &[0xAA, 0x01]), (500, Dir::Read, &[1, 2, 3])]);
         assert_eq!(first_divergence(&a, &a.clone()), None);
         assert_eq!(hash_logs(&a), hash_logs(&a.clone()));
     }
 
     #[test]
     fn a_changed_byte_is_found_at_its_offset_even_when_chunked_differently() {
-        let a = log(vec![(0, Dir::Write, &[1, 2]), (10, Dir::Write, &[3, 4])]);
-        let b = log(vec![(0, Dir::Write, &[1, 2]), (10, Dir::Write, &[3, 9])]);
+        let a = log(vec![(0, Dir::Written, &[1, 2]), (10, Dir::Written, &[3, 4])]);
+        let b = log(vec![(0, Dir::Written, &[1, 2]), (10, Dir::Written, &[3, 9])]);
         let d = first_divergence(&a, &b).unwrap();
-        assert_eq!((d.offset, d.recorded, d.replayed, d.dir), (3, Some(4), Some(9), Dir::Write));
+        assert_eq!((d.offset, d.recorded, d.replayed, d.dir), (3, Some(4), Some(9), Dir::Written));
         assert_ne!(hash_logs(&a), hash_logs(&b));
     }
 
@@ -283,7 +276,7 @@ mod tests {
     #[test]
     fn an_early_end_of_stream_ranks_by_its_time() {
         // Stream A ends at 1 s on replay; stream B differs at 100 s. A comes first.
-        let a = log(vec![(1_000_000, Dir::Read, &[1, 2]), (100_000_000, Dir::Write, &[7])]);
+        let a = log(vec![(1_000_000, Dir::Read, &[1, 2]), (100_000_000, Dir::Written, &[7])]);
         let mut b = a.clone();
         b[0].chunks[0].bytes.truncate(1);
         b[0].chunks[1].bytes[0] = 8;
@@ -301,7 +294,7 @@ mod tests {
             scenario_ron: "Scenario()".into(),
             profile_ron: "()".into(),
             seed: 3,
-            logs: log(vec![(7, Dir::Write, &[0xAA])]),
+            logs: log(vec![(7, Dir::Written, &[0xAA])]),
         };
         let path = dir.join("a.rec");
         rec.save(&path).unwrap();

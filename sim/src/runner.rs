@@ -26,7 +26,7 @@ use transport::{
 
 use crate::body::RobotBody;
 use crate::grid::{GridFrame, TruthGrid};
-use crate::record::{Chunk, Dir, EndpointLog, hash_logs};
+use crate::record::{Dir, EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario, Step};
 use crate::twin::{Twin, WriteBudget};
@@ -178,8 +178,8 @@ fn fault_config(f: &LinkFaults) -> FaultConfig {
     FaultConfig {
         rx: bytes,
         tx: bytes,
-        rx_delay_micros: (f64::from(f.latency_ms) * 1000.0).round() as u64,
-        disconnect_at_micros: None,
+        rx_delay: Duration::from_micros((f64::from(f.latency_ms) * 1000.0).round() as u64),
+        disconnect_at: None,
     }
 }
 
@@ -291,7 +291,7 @@ impl Lockstep {
         }
         self.now += self.dt;
         let now = self.now;
-        self.clock.set_micros(now.total_micros());
+        self.clock.set(Instant::from_micros(now.total_micros()));
         self.steps += 1;
 
         for (fault, fired) in self.faults.iter().zip(self.faults_fired.iter_mut()) {
@@ -371,14 +371,7 @@ impl Lockstep {
                     &mut self.logs[last]
                 }
             };
-            log.chunks.extend(records.into_iter().map(|r| Chunk {
-                micros: r.micros,
-                dir: match r.direction {
-                    transport::Direction::Read => Dir::Read,
-                    transport::Direction::Written => Dir::Write,
-                },
-                bytes: r.bytes,
-            }));
+            log.chunks.extend(records);
         }
     }
 
@@ -520,7 +513,7 @@ impl Lockstep {
     fn stream(&self, link: &str, endpoint: &str, dir: Dir) -> Vec<u8> {
         let mut out = Vec::new();
         for log in self.logs.iter().filter(|l| l.link == link && l.endpoint == endpoint) {
-            for chunk in log.chunks.iter().filter(|c| c.dir == dir) {
+            for chunk in log.chunks.iter().filter(|c| c.direction == dir) {
                 out.extend_from_slice(&chunk.bytes);
             }
         }
@@ -528,9 +521,9 @@ impl Lockstep {
     }
 
     fn link_stats(&self, name: &str, carto: &str, board: &str, proto: Proto) -> LinkStats {
-        let sent_out = self.stream(name, carto, Dir::Write);
+        let sent_out = self.stream(name, carto, Dir::Written);
         let got_out = self.stream(name, board, Dir::Read);
-        let sent_in = self.stream(name, board, Dir::Write);
+        let sent_in = self.stream(name, board, Dir::Written);
         let got_in = self.stream(name, carto, Dir::Read);
         // Carto → board is judged by the board's receive policy, board → Carto by the checksum
         // the board sends: with matching settings, every error is corruption on the line.
@@ -557,7 +550,7 @@ impl Lockstep {
         };
         let mut inbound = DirectionStats { bytes: runtime.client_bytes_out, frames: 0, errors: 0 };
         for log in self.logs.iter().filter(|l| l.link == "gui") {
-            let sent = self.stream("gui", &log.endpoint, Dir::Write);
+            let sent = self.stream("gui", &log.endpoint, Dir::Written);
             outbound.bytes += sent.len() as u64;
             let got = self.stream("gui", &log.endpoint, Dir::Read);
             let d = direction_stats(0, &got, Proto::Link, ChecksumPolicy::default());

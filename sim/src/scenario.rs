@@ -23,20 +23,8 @@ use serde::{Deserialize, Serialize};
 /// The built-in default room (`explobot run` with no argument).
 pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/default.ron");
 
-/// A compass heading on the grid: Cute's, written by name in scenario files (`heading: East`).
-pub use cute::Heading;
-
-/// The world angle of a grid heading, radians counter-clockwise from `+x`: rows grow down the
-/// map (world −y), columns to the right (world +x).
-fn world_angle(heading: Heading) -> f32 {
-    use std::f32::consts::{FRAC_PI_2, PI};
-    match heading {
-        Heading::East => 0.0,
-        Heading::North => FRAC_PI_2,
-        Heading::West => PI,
-        Heading::South => -FRAC_PI_2,
-    }
-}
+/// A compass heading on the grid, written by name in scenario files (`heading: East`).
+pub use robot_model::grid::Heading;
 
 /// A static obstacle in the room.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -392,11 +380,10 @@ impl LoadedScenario {
     /// The robot's world pose at the start: the centre of its start cell, facing its start
     /// heading.
     pub fn start_pose(&self) -> Pose2 {
-        let frame =
-            crate::grid::GridFrame::for_room(&self.scenario.room, self.scenario.cell_size(&self.profile));
+        let frame = crate::grid::room_frame(&self.scenario.room, self.scenario.cell_size(&self.profile));
         let start = self.scenario.start;
         let (x, y) = frame.cell_center(usize::from(start.row), usize::from(start.col));
-        Pose2::new(x, y, world_angle(start.heading))
+        Pose2::new(x, y, start.heading.world_angle())
     }
 
     /// Loads a scenario file and the robot profile it names.
@@ -462,7 +449,7 @@ impl LoadedScenario {
         // The overrides must leave a valid robot (a negative friction would break the physics).
         profile.validate().map_err(|e| at("noise", format!("noise overrides: {e}")))?;
         let cell = scenario.cell_size(&profile);
-        let frame = crate::grid::GridFrame::for_room(&scenario.room, cell);
+        let frame = crate::grid::room_frame(&scenario.room, cell);
         let (width, height) = crate::grid::room_extent(&scenario.room);
         let max = crate::grid::MAX_CELLS as f32 * cell;
         if width > max || height > max {

@@ -126,7 +126,7 @@ struct Pacer {
 
 impl Pacer {
     fn new(baud: u32) -> Self {
-        Pacer { bytes_per_s: f64::from(baud) / 10.0, credit: FIFO }
+        Pacer { bytes_per_s: robot_model::time::line_bytes_per_sec(baud), credit: FIFO }
     }
 
     fn tick(&mut self, dt: Duration) -> usize {
@@ -183,7 +183,7 @@ pub fn serve(
     let max_catch_up = Duration::from_millis(50);
     let mut offset_micros = 0.0f64;
     while !stop.load(Ordering::SeqCst) {
-        let mut wall = clock.now_micros() as f64 * options.speed.max(1e-6) - offset_micros;
+        let mut wall = clock.now().total_micros() as f64 * options.speed.max(1e-6) - offset_micros;
         let behind = wall - now.total_micros() as f64;
         if behind > max_catch_up.total_micros() as f64 {
             let dropped = behind - max_catch_up.total_micros() as f64;

@@ -92,7 +92,7 @@ impl Twin {
     pub fn new(loaded: &LoadedScenario, seed: u64, dt: Duration) -> Twin {
         let scenario = &loaded.scenario;
         let profile = &loaded.profile;
-        let frame = GridFrame::for_room(&scenario.room, scenario.cell_size(profile));
+        let frame = crate::grid::room_frame(&scenario.room, scenario.cell_size(profile));
         let start = loaded.start_pose();
         Twin {
             body: RobotBody::new(scenario, profile, start, dt),

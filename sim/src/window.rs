@@ -55,7 +55,7 @@ use rapier2d::parry::shape::Shape;
 use robot_model::time::Instant;
 
 use crate::app::{Sim, SimSystems};
-use crate::grid::{obstacle_shape, point_in_polygon};
+use crate::grid::{obstacle_shape, point_in_poly2d, room_points};
 use crate::report::Report;
 use crate::runner::Lockstep;
 use crate::scenario::{Obstacle, Scenario};
@@ -323,12 +323,13 @@ fn floor_image(scenario: &Scenario) -> (Image, Vec2, Vec2) {
     let w = ((size.x * texels).ceil() as u32).max(1);
     let h = ((size.y * texels).ceil() as u32).max(1);
     let shapes: Vec<_> = scenario.obstacles.iter().filter_map(obstacle_shape).collect();
+    let room = room_points(&scenario.room);
     let mut data = Vec::with_capacity((w * h * 4) as usize);
     for py in 0..h {
         for px in 0..w {
             let x = min.x + (px as f32 + 0.5) / texels;
             let y = max.y - (py as f32 + 0.5) / texels;
-            let c = if !point_in_polygon(&scenario.room, x, y) {
+            let c = if !point_in_poly2d(rapier2d::parry::math::Vector::new(x, y), &room) {
                 OUTSIDE_RGB
             } else if shapes.iter().any(|(pose, s)| contains(pose, s.as_ref(), x, y)) {
                 OBSTACLE_RGB

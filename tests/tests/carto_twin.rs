@@ -73,7 +73,7 @@ fn rig(obstacles: &str) -> Rig {
         motor_carto,
         sensor_carto,
     );
-    let frame = GridFrame::for_room(&loaded.scenario.room, loaded.scenario.cell_size(&profile));
+    let frame = sim::grid::room_frame(&loaded.scenario.room, loaded.scenario.cell_size(&profile));
     let mut rig = Rig {
         clock,
         now: Instant::ZERO,
@@ -91,7 +91,7 @@ fn rig(obstacles: &str) -> Rig {
 impl Rig {
     fn step(&mut self) {
         self.now += DT;
-        self.clock.set_micros(self.now.total_micros());
+        self.clock.set(Instant::from_micros(self.now.total_micros()));
         self.twin.board_io(self.now, &mut self.motor, &mut self.sensor, WriteBudget::UNLIMITED);
         self.carto.step(self.now);
         self.twin.physics_step(self.now);

@@ -23,13 +23,13 @@ fn backlog_per_second(profile: &RobotProfile, seconds: u64) -> (Vec<u64>, bool) 
     let mut now = Instant::ZERO;
     for i in 1..=(seconds * 200) {
         now += step;
-        clock.set_micros(now.total_micros());
+        clock.set(Instant::from_micros(now.total_micros()));
         pending.extend(board.poll(now, &inputs));
         let n = board_end.write(&pending).unwrap();
         pending.drain(..n);
         while carto_end.read(&mut buf).unwrap() > 0 {}
         if i % 200 == 0 {
-            backlog.push(board_end.stats().backlog_micros);
+            backlog.push(board_end.stats().backlog.total_micros());
         }
     }
     (backlog, board.budget_warned())

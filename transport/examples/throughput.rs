@@ -49,7 +49,7 @@ fn main() -> Result<(), Error> {
     let mut buf = vec![0u8; 4096];
     let mut moved = 0usize;
     while moved < 32 * MIB {
-        clock.advance_micros(100);
+        clock.advance(robot_model::time::Duration::from_micros(100));
         moved += a.write(&chunk)?;
         while b.read(&mut buf)? > 0 {}
     }
@@ -73,7 +73,7 @@ fn main() -> Result<(), Error> {
             board.write(&frame)?;
         }
         received += board.read(&mut buf)? + carto.read(&mut buf)?;
-        clock.advance_micros(5_000);
+        clock.advance(robot_model::time::Duration::from_micros(5_000));
     }
     let wall = start.elapsed().as_secs_f64();
     println!(

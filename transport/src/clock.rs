@@ -1,34 +1,37 @@
 //! Clocks for links that need time: a [`MockClock`] the lockstep runner advances, and a
 //! [`WallClock`] for the real-time binaries.
 //!
-//! Time here is microseconds since the run started, the same count as `robot_model::time::Instant`
-//! (this crate depends on nothing in the workspace, so it carries a plain `u64`).
+//! Time here is [`Instant`]: microseconds since the run started, the one time type of the
+//! workspace (`robot_model::time`).
 //!
 //! Links that need time take `impl Clock + 'static` and keep it as an `Arc<dyn Clock>`; clones of
 //! a [`MockClock`] share one time, so the runner keeps a clone and advances it.
 //!
 //! ```
+//! use robot_model::time::{Duration, Instant};
 //! use transport::{Clock, MockClock};
 //! let clock = MockClock::new();
 //! let seen_by_link = clock.clone();
-//! clock.advance_micros(5_000);
-//! assert_eq!(seen_by_link.now_micros(), 5_000);
-//! clock.set_micros(1_000); // never backwards
-//! assert_eq!(seen_by_link.now_micros(), 5_000);
+//! clock.advance(Duration::from_millis(5));
+//! assert_eq!(seen_by_link.now(), Instant::from_micros(5_000));
+//! clock.set(Instant::from_millis(1)); // never backwards
+//! assert_eq!(seen_by_link.now(), Instant::from_micros(5_000));
 //! ```
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// A source of run time in microseconds.
+use robot_model::time::{Duration, Instant};
+
+/// A source of run time.
 pub trait Clock: Send + Sync {
-    /// Microseconds since the run started.
-    fn now_micros(&self) -> u64;
+    /// Time since the run started.
+    fn now(&self) -> Instant;
 }
 
 impl<C: Clock + ?Sized> Clock for Arc<C> {
-    fn now_micros(&self) -> u64 {
-        C::now_micros(self)
+    fn now(&self) -> Instant {
+        C::now(self)
     }
 }
 
@@ -45,19 +48,19 @@ impl MockClock {
     }
 
     /// Sets the time. Time may only move forward; an earlier value is ignored.
-    pub fn set_micros(&self, micros: u64) {
-        self.micros.fetch_max(micros, Ordering::SeqCst);
+    pub fn set(&self, at: Instant) {
+        self.micros.fetch_max(at.total_micros(), Ordering::SeqCst);
     }
 
-    /// Moves the time forward by `micros`.
-    pub fn advance_micros(&self, micros: u64) {
-        self.micros.fetch_add(micros, Ordering::SeqCst);
+    /// Moves the time forward by `by`.
+    pub fn advance(&self, by: Duration) {
+        self.micros.fetch_add(by.total_micros(), Ordering::SeqCst);
     }
 }
 
 impl Clock for MockClock {
-    fn now_micros(&self) -> u64 {
-        self.micros.load(Ordering::SeqCst)
+    fn now(&self) -> Instant {
+        Instant::from_micros(self.micros.load(Ordering::SeqCst))
     }
 }
 
@@ -76,7 +79,7 @@ impl WallClock {
 }
 
 impl Clock for WallClock {
-    fn now_micros(&self) -> u64 {
-        u64::try_from(self.start.elapsed().as_micros()).unwrap_or(u64::MAX)
+    fn now(&self) -> Instant {
+        Instant::from_micros(u64::try_from(self.start.elapsed().as_micros()).unwrap_or(u64::MAX))
     }
 }

@@ -18,17 +18,18 @@
 //! - Time (delay, disconnect) comes only from the [`Clock`] given at construction.
 //!
 //! ```
+//! use robot_model::time::Instant;
 //! use transport::{ByteFaults, FaultInjector, Link, MemLink, MockClock};
 //! let clock = MockClock::new();
 //! let (a, mut b) = MemLink::pair(None, clock.clone());
 //! let mut a = FaultInjector::new(a, 42, clock.clone())
 //!     .tx_faults(ByteFaults { drop_rate: 0.5, ..ByteFaults::NONE })
-//!     .disconnect_at_micros(1_000);
+//!     .disconnect_at(Instant::from_millis(1));
 //! a.write(&[0u8; 1000])?;
 //! let dropped = a.counters().tx.dropped;
 //! assert!((400..600).contains(&dropped));
 //! assert_eq!(b.read(&mut [0u8; 1000])?, 1000 - dropped as usize);
-//! clock.set_micros(1_000);
+//! clock.set(Instant::from_millis(1));
 //! assert!(a.write(b"x").unwrap_err().is_disconnected());
 //! assert!(b.read(&mut [0u8; 1]).unwrap_err().is_disconnected());
 //! # Ok::<(), transport::Error>(())
@@ -39,6 +40,7 @@ use std::sync::Arc;
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use robot_model::time::{Duration, Instant};
 
 use crate::clock::Clock;
 use crate::link::{Error, Link};
@@ -84,10 +86,10 @@ pub struct FaultConfig {
     pub rx: ByteFaults,
     /// Faults on bytes written to the wrapped link.
     pub tx: ByteFaults,
-    /// Received bytes become readable this many µs after they were read from the wrapped link.
-    pub rx_delay_micros: u64,
-    /// From this time (µs) on, the link is cut.
-    pub disconnect_at_micros: Option<u64>,
+    /// Received bytes become readable this long after they were read from the wrapped link.
+    pub rx_delay: Duration,
+    /// From this time on, the link is cut.
+    pub disconnect_at: Option<Instant>,
 }
 
 /// What the injector did to one direction.
@@ -124,7 +126,7 @@ pub struct FaultInjector<L> {
     rx_rng: ChaCha8Rng,
     tx_rng: ChaCha8Rng,
     /// Received bytes and the time they become readable.
-    rx_queue: VecDeque<(u64, u8)>,
+    rx_queue: VecDeque<(Instant, u8)>,
     rx_scratch: Vec<u8>,
     /// An error from the wrapped link, reported once the delayed bytes are out.
     rx_error: Option<Error>,
@@ -210,15 +212,15 @@ impl<L: Link> FaultInjector<L> {
         self
     }
 
-    /// The same injector holding received bytes back `micros` µs.
-    pub fn rx_delay_micros(mut self, micros: u64) -> Self {
-        self.config.rx_delay_micros = micros;
+    /// The same injector holding received bytes back by `delay`.
+    pub fn rx_delay(mut self, delay: Duration) -> Self {
+        self.config.rx_delay = delay;
         self
     }
 
-    /// The same injector cutting the link at `micros` µs.
-    pub fn disconnect_at_micros(mut self, micros: u64) -> Self {
-        self.config.disconnect_at_micros = Some(micros);
+    /// The same injector cutting the link at `at`.
+    pub fn disconnect_at(mut self, at: Instant) -> Self {
+        self.config.disconnect_at = Some(at);
         self
     }
 
@@ -261,16 +263,16 @@ impl<L: Link> FaultInjector<L> {
     }
 
     /// Cuts the link when its time has come; `Disconnected` once it is cut.
-    fn check_live(&mut self, now: u64) -> Result<(), Error> {
-        if self.config.disconnect_at_micros.is_some_and(|at| now >= at) && self.inner.is_some() {
-            tracing::debug!(now, "fault injector: cutting the link");
+    fn check_live(&mut self, now: Instant) -> Result<(), Error> {
+        if self.config.disconnect_at.is_some_and(|at| now >= at) && self.inner.is_some() {
+            tracing::debug!(%now, "fault injector: cutting the link");
             self.disconnect_now();
         }
         if self.inner.is_some() { Ok(()) } else { Err(cut_error()) }
     }
 
     /// Sends held-back written bytes; `Ok(true)` when none are left.
-    fn flush_tx(&mut self, now: u64) -> Result<bool, Error> {
+    fn flush_tx(&mut self, now: Instant) -> Result<bool, Error> {
         self.check_live(now)?;
         while !self.tx_pending.is_empty() {
             let inner = self.inner.as_mut().ok_or_else(cut_error)?;
@@ -288,7 +290,7 @@ impl<L: Link> Link for FaultInjector<L> {
     type Error = Error;
 
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
-        let now = self.clock.now_micros();
+        let now = self.clock.now();
         self.check_live(now)?;
         // Written bytes held back must not wait for the next write; their errors show there.
         let _ = self.flush_tx(now);
@@ -297,7 +299,7 @@ impl<L: Link> Link for FaultInjector<L> {
             let inner = self.inner.as_mut().ok_or_else(cut_error)?;
             match inner.read(&mut self.rx_scratch) {
                 Ok(n) => {
-                    let release = now.saturating_add(self.config.rx_delay_micros);
+                    let release = now + self.config.rx_delay;
                     let faults = self.config.rx;
                     for &byte in &self.rx_scratch[..n] {
                         if faults.is_none() {
@@ -336,7 +338,7 @@ impl<L: Link> Link for FaultInjector<L> {
     }
 
     fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
-        let now = self.clock.now_micros();
+        let now = self.clock.now();
         self.check_live(now)?;
         let mut taken = 0;
         loop {
@@ -537,14 +539,14 @@ mod tests {
     fn fixed_delay_holds_bytes_back() {
         let clock = MockClock::new();
         let (mut a, b) = MemLink::pair(None, clock.clone());
-        let mut b = FaultInjector::new(b, 0, clock.clone()).rx_delay_micros(5_000);
-        clock.set_micros(1_000);
+        let mut b = FaultInjector::new(b, 0, clock.clone()).rx_delay(Duration::from_micros(5_000));
+        clock.set(Instant::from_micros(1_000));
         a.write(b"late").unwrap();
         let mut buf = [0u8; 8];
         assert_eq!(b.read(&mut buf).unwrap(), 0);
-        clock.set_micros(5_999);
+        clock.set(Instant::from_micros(5_999));
         assert_eq!(b.read(&mut buf).unwrap(), 0);
-        clock.set_micros(6_000);
+        clock.set(Instant::from_micros(6_000));
         assert_eq!(b.read(&mut buf).unwrap(), 4);
         assert_eq!(&buf[..4], b"late");
     }
@@ -553,12 +555,12 @@ mod tests {
     fn delayed_bytes_come_before_the_disconnect() {
         let clock = MockClock::new();
         let (mut a, b) = MemLink::pair(None, clock.clone());
-        let mut b = FaultInjector::new(b, 0, clock.clone()).rx_delay_micros(1_000);
+        let mut b = FaultInjector::new(b, 0, clock.clone()).rx_delay(Duration::from_micros(1_000));
         a.write(b"end").unwrap();
         drop(a);
         let mut buf = [0u8; 8];
         assert_eq!(b.read(&mut buf).unwrap(), 0);
-        clock.set_micros(1_000);
+        clock.set(Instant::from_micros(1_000));
         assert_eq!(b.read(&mut buf).unwrap(), 3);
         assert!(b.read(&mut buf).unwrap_err().is_disconnected());
     }
@@ -567,11 +569,11 @@ mod tests {
     fn disconnect_at_time_cuts_both_sides() {
         let clock = MockClock::new();
         let (a, mut b) = MemLink::pair(None, clock.clone());
-        let mut a = FaultInjector::new(a, 0, clock.clone()).disconnect_at_micros(10_000);
-        clock.set_micros(9_999);
+        let mut a = FaultInjector::new(a, 0, clock.clone()).disconnect_at(Instant::from_micros(10_000));
+        clock.set(Instant::from_micros(9_999));
         assert_eq!(a.write(b"ok").unwrap(), 2);
         assert!(!a.counters().disconnected);
-        clock.set_micros(10_000);
+        clock.set(Instant::from_micros(10_000));
         assert_eq!(a.read(&mut [0u8; 4]).unwrap_err().kind(), ErrorKind::Disconnected);
         assert!(a.write(b"no").unwrap_err().is_disconnected());
         assert!(a.counters().disconnected);

@@ -4,7 +4,7 @@
 //! A pair has one pipe per direction. With a baud rate a byte is on the wire for 10 bit times
 //! (8N1: start, 8 data, stop): a byte written at `t` onto an idle line becomes readable at
 //! `t + 10·10⁶/baud` µs, and bytes are serialised one after another, so writing faster than the
-//! line carries shows up as a growing [`MemLinkStats::backlog_micros`]. Without a baud rate bytes
+//! line carries shows up as a growing [`MemLinkStats::backlog`]. Without a baud rate bytes
 //! are readable as soon as they are written.
 //!
 //! Invariants:
@@ -19,13 +19,14 @@
 //!   on every read and write.
 //!
 //! ```
+//! use robot_model::time::Duration;
 //! use transport::{Link, MemLink, MockClock};
 //! let clock = MockClock::new();
 //! let (mut carto, mut board) = MemLink::pair(Some(9600), clock.clone());
 //! assert_eq!(carto.write(b"0123456789")?, 10);
 //! let mut buf = [0u8; 16];
 //! assert_eq!(board.read(&mut buf)?, 0); // nothing has crossed the wire yet
-//! clock.advance_micros(10_417); // 10 bytes × 10 bits at 9600 baud = 10.4167 ms
+//! clock.advance(Duration::from_micros(10_417)); // 10 bytes × 10 bits at 9600 baud = 10.4167 ms
 //! assert_eq!(board.read(&mut buf)?, 10);
 //! drop(carto);
 //! assert!(board.read(&mut buf).unwrap_err().is_disconnected());
@@ -35,11 +36,10 @@
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
+use robot_model::time::{BITS_PER_BYTE, Duration, Instant};
+
 use crate::clock::Clock;
 use crate::link::{Connector, Error, Link, Listener};
-
-/// Bits on the wire per byte (8N1: start bit, 8 data bits, stop bit).
-pub const BITS_PER_BYTE: u64 = 10;
 
 /// The default bound of each direction's queue, in bytes.
 pub const DEFAULT_CAPACITY: usize = 4096;
@@ -85,7 +85,7 @@ pub struct MemLinkStats {
     pub in_flight: usize,
     /// How long until the last byte this end wrote is readable by the peer, in µs: the extra
     /// latency a byte written now would see before its own byte time.
-    pub backlog_micros: u64,
+    pub backlog: Duration,
     /// Bytes a `read` on this end would return now.
     pub readable: usize,
     /// Bytes this end has written since the pair was made.
@@ -198,7 +198,7 @@ impl std::fmt::Debug for MemLink {
         f.debug_struct("MemLink")
             .field("side", &self.side)
             .field("config", &self.config)
-            .field("now_micros", &self.clock.now_micros())
+            .field("now", &self.clock.now())
             .finish_non_exhaustive()
     }
 }
@@ -241,30 +241,30 @@ impl MemLink {
 
     /// Queue depth and latency seen from this end now.
     pub fn stats(&self) -> MemLinkStats {
-        let now = self.clock.now_micros();
+        let now = self.clock.now();
         let now_units = self.now_units(now);
         let shared = self.lock();
         let out = &shared.pipes[self.side];
         let inbound = &shared.pipes[1 - self.side];
-        let backlog_micros = match self.config.effective_baud() {
+        let backlog = match self.config.effective_baud() {
             Some(baud) => {
                 let free_at = out.line_free.div_ceil(baud);
-                u64::try_from(free_at).unwrap_or(u64::MAX).saturating_sub(now)
+                Instant::from_micros(u64::try_from(free_at).unwrap_or(u64::MAX)) - now
             }
-            None => 0,
+            None => Duration::ZERO,
         };
         MemLinkStats {
             queued: out.bytes.len(),
             in_flight: out.bytes.len() - out.readable(now_units),
-            backlog_micros,
+            backlog,
             readable: inbound.readable(now_units),
             written_total: out.written_total,
             read_total: inbound.read_total,
         }
     }
 
-    fn now_units(&self, now_micros: u64) -> Option<u128> {
-        self.config.effective_baud().map(|b| u128::from(now_micros) * b)
+    fn now_units(&self, now: Instant) -> Option<u128> {
+        self.config.effective_baud().map(|b| u128::from(now.total_micros()) * b)
     }
 
     fn lock(&self) -> MutexGuard<'_, Shared> {
@@ -282,7 +282,7 @@ impl Link for MemLink {
     type Error = Error;
 
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
-        let now_units = self.now_units(self.clock.now_micros());
+        let now_units = self.now_units(self.clock.now());
         let side = self.side;
         let mut shared = self.lock();
         if shared.closed[side] {
@@ -302,7 +302,7 @@ impl Link for MemLink {
     }
 
     fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
-        let now_units = self.now_units(self.clock.now_micros());
+        let now_units = self.now_units(self.clock.now());
         let side = self.side;
         let capacity = self.config.capacity;
         let mut shared = self.lock();
@@ -428,13 +428,13 @@ mod tests {
         let (mut a, b) = MemLink::pair(Some(9600), clock.clone());
         assert_eq!(a.write(b"0123456789").unwrap(), 10);
         assert_eq!(readable(&b), 0);
-        clock.set_micros(1_041); // one byte = 1041.67 µs
+        clock.set(Instant::from_micros(1_041)); // one byte = 1041.67 µs
         assert_eq!(readable(&b), 0);
-        clock.set_micros(1_042);
+        clock.set(Instant::from_micros(1_042));
         assert_eq!(readable(&b), 1);
-        clock.set_micros(10_416);
+        clock.set(Instant::from_micros(10_416));
         assert_eq!(readable(&b), 9);
-        clock.set_micros(10_417);
+        clock.set(Instant::from_micros(10_417));
         assert_eq!(readable(&b), 10);
     }
 
@@ -448,14 +448,14 @@ mod tests {
         let mut buf = [0u8; 7];
         let mut steps = 0;
         while got.len() < data.len() && steps < 10_000 {
-            clock.advance_micros(50);
+            clock.advance(Duration::from_micros(50));
             let n = b.read(&mut buf).unwrap();
             got.extend_from_slice(&buf[..n]);
             steps += 1;
         }
         assert_eq!(got, data);
         // 256 bytes at 115200 baud: 22222.2 µs, so about 445 steps of 50 µs.
-        assert_eq!(clock.now_micros(), 22_250);
+        assert_eq!(clock.now(), Instant::from_micros(22_250));
     }
 
     #[test]
@@ -466,7 +466,7 @@ mod tests {
         let mut buf = [0u8; 8];
         assert_eq!(b.read(&mut buf).unwrap(), 5);
         assert_eq!(&buf[..5], b"hello");
-        assert_eq!(a.stats().backlog_micros, 0);
+        assert_eq!(a.stats().backlog, Duration::ZERO);
     }
 
     #[test]
@@ -503,9 +503,9 @@ mod tests {
         for _ in 0..20 {
             // 20 bytes per ms, the line carries 0.96.
             assert_eq!(a.write(&[0x55; 20]).unwrap(), 20);
-            clock.advance_micros(1_000);
+            clock.advance(Duration::from_micros(1_000));
             b.read(&mut [0u8; 64]).unwrap();
-            backlog.push(a.stats().backlog_micros);
+            backlog.push(a.stats().backlog.total_micros());
         }
         assert!(backlog.windows(2).all(|w| w[1] > w[0]), "{backlog:?}");
         // 400 bytes written take 416.7 ms on the line; 20 ms have passed.
@@ -517,11 +517,11 @@ mod tests {
     fn idle_line_does_not_accumulate_credit() {
         let clock = MockClock::new();
         let (mut a, b) = MemLink::pair(Some(9600), clock.clone());
-        clock.set_micros(1_000_000);
+        clock.set(Instant::from_micros(1_000_000));
         a.write(b"ab").unwrap();
-        clock.set_micros(1_001_041);
+        clock.set(Instant::from_micros(1_001_041));
         assert_eq!(readable(&b), 0);
-        clock.set_micros(1_001_042);
+        clock.set(Instant::from_micros(1_001_042));
         assert_eq!(readable(&b), 1);
     }
 
@@ -533,7 +533,7 @@ mod tests {
         drop(a);
         let mut buf = [0u8; 8];
         assert_eq!(b.read(&mut buf).unwrap(), 0, "still on the wire");
-        clock.advance_micros(3_200);
+        clock.advance(Duration::from_micros(3_200));
         assert_eq!(b.read(&mut buf).unwrap(), 3);
         assert_eq!(b.read(&mut buf).unwrap_err().kind(), ErrorKind::Disconnected);
         assert_eq!(b.read(&mut buf).unwrap_err().kind(), ErrorKind::Disconnected);
@@ -575,7 +575,7 @@ mod tests {
         assert_eq!(c1.write(b"hi").unwrap(), 2);
         let mut buf = [0u8; 4];
         assert_eq!(s1.read(&mut buf).unwrap(), 0, "bytes still on the wire");
-        clock.advance_micros(174); // 2 × 86.8 µs
+        clock.advance(Duration::from_micros(174)); // 2 × 86.8 µs
         assert_eq!(s1.read(&mut buf).unwrap(), 2);
         assert_eq!(&buf[..2], b"hi");
     }

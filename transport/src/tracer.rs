@@ -10,16 +10,17 @@
 //! - Records stay until taken ([`Tracer::take_records`] or a [`TraceHandle`]).
 //!
 //! ```
+//! use robot_model::time::Instant;
 //! use transport::{Direction, Link, MemLink, MockClock, Tracer, TraceRecord};
 //! let clock = MockClock::new();
 //! let (a, mut b) = MemLink::pair(None, clock.clone());
 //! let mut a = Tracer::new(a, clock.clone());
 //! let recording = a.handle(); // can be kept by the runner after `a` is handed over
-//! clock.set_micros(1_500);
+//! clock.set(Instant::from_micros(1_500));
 //! a.write(b"go")?;
 //! assert_eq!(
 //!     recording.take(),
-//!     vec![TraceRecord { micros: 1_500, direction: Direction::Written, bytes: b"go".to_vec() }]
+//!     vec![TraceRecord { at: Instant::from_micros(1_500), direction: Direction::Written, bytes: b"go".to_vec() }]
 //! );
 //! # Ok::<(), transport::Error>(())
 //! ```
@@ -27,10 +28,12 @@
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
 use crate::clock::Clock;
+use robot_model::time::Instant;
+
 use crate::link::Link;
 
 /// Which way bytes went through a traced link.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize)]
 pub enum Direction {
     /// Returned by `read`: bytes that came in.
     Read,
@@ -39,10 +42,10 @@ pub enum Direction {
 }
 
 /// Bytes that went one way through a link at one time.
-#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub struct TraceRecord {
-    /// Clock time of the call, µs since the run started.
-    pub micros: u64,
+    /// Clock time of the call.
+    pub at: Instant,
     /// In or out.
     pub direction: Direction,
     /// The bytes, in order.
@@ -126,13 +129,13 @@ impl<L: Link> Tracer<L> {
         if bytes.is_empty() {
             return;
         }
-        let micros = self.clock.now_micros();
+        let at = self.clock.now();
         let mut records = lock(&self.records);
         match records.last_mut() {
-            Some(last) if last.micros == micros && last.direction == direction => {
+            Some(last) if last.at == at && last.direction == direction => {
                 last.bytes.extend_from_slice(bytes);
             }
-            _ => records.push(TraceRecord { micros, direction, bytes: bytes.to_vec() }),
+            _ => records.push(TraceRecord { at, direction, bytes: bytes.to_vec() }),
         }
     }
 }
@@ -160,7 +163,7 @@ mod tests {
     use crate::mem::{MemLink, MemLinkConfig};
 
     fn rec(micros: u64, direction: Direction, bytes: &[u8]) -> TraceRecord {
-        TraceRecord { micros, direction, bytes: bytes.to_vec() }
+        TraceRecord { at: Instant::from_micros(micros), direction, bytes: bytes.to_vec() }
     }
 
     #[test]
@@ -168,13 +171,13 @@ mod tests {
         let clock = MockClock::new();
         let (a, mut b) = MemLink::pair(None, clock.clone());
         let mut a = Tracer::new(a, clock.clone());
-        clock.set_micros(10);
+        clock.set(Instant::from_micros(10));
         a.write(b"ping").unwrap();
-        clock.set_micros(20);
+        clock.set(Instant::from_micros(20));
         b.write(b"pong").unwrap();
         let mut buf = [0u8; 2];
         assert_eq!(a.read(&mut buf).unwrap(), 2);
-        clock.set_micros(30);
+        clock.set(Instant::from_micros(30));
         assert_eq!(a.read(&mut buf).unwrap(), 2);
         assert_eq!(a.read(&mut buf).unwrap(), 0);
         assert_eq!(

@@ -206,7 +206,7 @@ fn sleep_tick() -> Box<dyn FnMut() + Send> {
 }
 
 fn clock_tick(clock: MockClock, micros: u64) -> Box<dyn FnMut() + Send> {
-    Box::new(move || clock.advance_micros(micros))
+    Box::new(move || clock.advance(robot_model::time::Duration::from_micros(micros)))
 }
 
 /// A fresh path in the temp folder (the `PtyLink` removes its symlink when dropped).

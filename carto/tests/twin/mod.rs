@@ -75,7 +75,7 @@ impl Twin {
     pub fn tick(&mut self) {
         let dt = Duration::from_millis(1);
         self.now += dt;
-        self.clock.set_micros(self.now.total_micros());
+        self.clock.set(Instant::from_micros(self.now.total_micros()));
         let mut buf = [0u8; 1024];
         // Boards receive what Carto sent.
         while let Ok(n @ 1..) = self.motor_end.read(&mut buf) {

@@ -14,11 +14,6 @@ pub use sensor_board::{SensorBoard, SensorBoardCounters, SensorInputs};
 
 use crate::time::{Duration, Instant};
 
-/// The serial byte budget of a line: 8N1 spends ten bits per byte.
-pub fn baud_bytes_per_sec(baud: u32) -> f32 {
-    baud as f32 / 10.0
-}
-
 /// The period of a rate in Hz, `None` for a rate of zero (stream off) or a non-finite one.
 pub(crate) fn period_of(hz: f32) -> Option<Duration> {
     (hz.is_finite() && hz > 0.0).then(|| Duration::from_secs_f64(1.0 / f64::from(hz)))

@@ -44,10 +44,11 @@ use protocol::motor::{
     TelemetryForm,
 };
 
-use super::{Periodic, baud_bytes_per_sec};
+use super::Periodic;
 use crate::kinematics::{MecanumKinematics, PercentCommand, mix_percent};
 use crate::pose::{Pose2, Twist};
 use crate::profile::{RobotProfile, TelemetryFormSetting};
+use crate::time::line_bytes_per_sec;
 use crate::time::{Duration, Instant};
 
 /// What the motor board has seen and done since it started.
@@ -250,7 +251,7 @@ impl MotorBoard {
 
     /// The line's byte budget (`motor_baud / 10`).
     pub fn budget_bytes_per_sec(&self) -> f32 {
-        baud_bytes_per_sec(self.baud)
+        line_bytes_per_sec(self.baud) as f32
     }
 
     fn apply(&mut self, command: MotorCommand) {

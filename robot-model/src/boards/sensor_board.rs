@@ -50,9 +50,10 @@ use protocol::sensor::{
     SensorStatus, SensorValue, SwitchState,
 };
 
-use super::{Periodic, baud_bytes_per_sec};
+use super::Periodic;
 use crate::pose::wrap_degrees_360;
 use crate::profile::RobotProfile;
+use crate::time::line_bytes_per_sec;
 use crate::time::{Duration, Instant};
 
 /// What the physics and sensor models measured, handed to [`SensorBoard::poll`].
@@ -285,7 +286,7 @@ impl SensorBoard {
 
     /// The line's byte budget (`sensor_baud / 10`, 8N1).
     pub fn budget_bytes_per_sec(&self) -> f32 {
-        baud_bytes_per_sec(self.baud)
+        line_bytes_per_sec(self.baud) as f32
     }
 
     /// Whether the configured rates exceed the line's byte budget.
