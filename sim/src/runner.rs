@@ -291,7 +291,7 @@ impl Lockstep {
         }
         self.now += self.dt;
         let now = self.now;
-        self.clock.set(Instant::from_micros(now.total_micros()));
+        self.clock.set(now);
         self.steps += 1;
 
         for (fault, fired) in self.faults.iter().zip(self.faults_fired.iter_mut()) {

@@ -329,7 +329,7 @@ fn floor_image(scenario: &Scenario) -> (Image, Vec2, Vec2) {
         for px in 0..w {
             let x = min.x + (px as f32 + 0.5) / texels;
             let y = max.y - (py as f32 + 0.5) / texels;
-            let c = if !point_in_poly2d(rapier2d::parry::math::Vector::new(x, y), &room) {
+            let c = if !point_in_poly2d(Vector::new(x, y), &room) {
                 OUTSIDE_RGB
             } else if shapes.iter().any(|(pose, s)| contains(pose, s.as_ref(), x, y)) {
                 OBSTACLE_RGB

@@ -32,13 +32,14 @@ fn a_replay_matches_the_recording_and_a_changed_byte_is_located() {
     // Flip one byte Carto wrote to the motor board, 10 bytes into its 100th write.
     let mut tampered = recorded.clone();
     let log = tampered.iter_mut().find(|l| l.link == "motor" && l.endpoint == "carto").unwrap();
-    let writes: Vec<usize> = (0..log.chunks.len()).filter(|&i| log.chunks[i].dir == Dir::Write).collect();
+    let writes: Vec<usize> =
+        (0..log.chunks.len()).filter(|&i| log.chunks[i].direction == Dir::Written).collect();
     let chunk = writes[99];
     let offset: usize = writes[..99].iter().map(|&i| log.chunks[i].bytes.len()).sum::<usize>();
     let at = 10.min(log.chunks[chunk].bytes.len() - 1);
     log.chunks[chunk].bytes[at] ^= 0x01;
     let d = first_divergence(&recorded, &tampered).expect("a divergence");
     assert_eq!(d.endpoint, "motor@carto");
-    assert_eq!(d.dir, Dir::Write);
+    assert_eq!(d.dir, Dir::Written);
     assert_eq!(d.offset, (offset + at) as u64);
 }
