@@ -145,7 +145,8 @@ pub struct Report {
     pub faults_injected: u64,
     /// Times Cute reconnected to Carto.
     pub reconnects: u64,
-    /// SHA-256 of every byte on every link with its time: equal hashes = identical runs.
+    /// SHA-256 of every byte on every link with its time: equal hashes = identical runs. Empty in
+    /// a report taken before the run is over.
     pub link_log_sha256: String,
     /// The expectations, checked.
     pub checks: Vec<Check>,

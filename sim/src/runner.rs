@@ -16,17 +16,15 @@
 
 use carto::{Carto, CartoConfig, CartoRuntime};
 use cute::{CellValue, Cute, CuteConfig, CuteError, Status};
-use protocol::link;
-use protocol::motor::ChecksumPolicy;
 use robot_model::time::{Duration, Instant};
 use transport::{
     ByteFaults, Connector, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock,
-    TraceHandle, Tracer, mem_listener,
+    TraceHandle, TraceTotals, Tracer, mem_listener,
 };
 
 use crate::body::RobotBody;
 use crate::grid::{GridFrame, TruthGrid};
-use crate::record::{Dir, EndpointLog, hash_logs};
+use crate::record::{EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario, Step};
 use crate::twin::{Twin, WriteBudget};
@@ -203,6 +201,8 @@ pub struct Lockstep {
     truth: TruthGrid,
     traces: Vec<(String, String, TraceHandle)>,
     logs: Vec<EndpointLog>,
+    /// The link-log hash, computed once the run is over (the logs no longer change then).
+    final_hash: std::sync::OnceLock<String>,
     settled_at: Option<Instant>,
 }
 
@@ -279,6 +279,7 @@ impl Lockstep {
             clock,
             traces,
             logs: Vec::new(),
+            final_hash: std::sync::OnceLock::new(),
             settled_at: None,
             loaded,
         })
@@ -471,11 +472,7 @@ impl Lockstep {
         let sim_time_s = self.now.as_secs_f64();
         let cute = &self.cute.cute;
         let (cx, cy, _) = cute.robot();
-        let mut links = vec![
-            self.link_stats("motor", "carto", "board", Proto::Motor),
-            self.link_stats("sensor", "carto", "board", Proto::Sensor),
-        ];
-        links.push(self.gui_stats());
+        let links = self.link_stats();
         let faults_injected = self.cute.fault_counts
             + self.cute.link.as_ref().map_or(0, |l| fault_total(l.inner()))
             + self.carto.motor_link().map_or(0, |l| fault_total(l.inner()))
@@ -502,7 +499,13 @@ impl Lockstep {
             links,
             faults_injected,
             reconnects: self.cute.connects.saturating_sub(1),
-            link_log_sha256: hash_logs(&self.logs),
+            // Hashing every byte of a long run costs; a report taken while the run goes on (the
+            // window's status) has none.
+            link_log_sha256: if self.is_finished() {
+                self.final_hash.get_or_init(|| hash_logs(&self.logs)).clone()
+            } else {
+                String::new()
+            },
             checks: Vec::new(),
             passed: false,
         };
@@ -510,83 +513,63 @@ impl Lockstep {
         report
     }
 
-    fn stream(&self, link: &str, endpoint: &str, dir: Dir) -> Vec<u8> {
-        let mut out = Vec::new();
-        for log in self.logs.iter().filter(|l| l.link == link && l.endpoint == endpoint) {
-            for chunk in log.chunks.iter().filter(|c| c.direction == dir) {
-                out.extend_from_slice(&chunk.bytes);
-            }
-        }
-        out
+    /// Bytes through the tracer of `link` at `endpoint`.
+    fn traced(&self, link: &str, endpoint: &str) -> TraceTotals {
+        self.traces
+            .iter()
+            .find(|(l, e, _)| l == link && e == endpoint)
+            .map_or_else(TraceTotals::default, |(_, _, h)| h.totals())
     }
 
-    fn link_stats(&self, name: &str, carto: &str, board: &str, proto: Proto) -> LinkStats {
-        let sent_out = self.stream(name, carto, Dir::Written);
-        let got_out = self.stream(name, board, Dir::Read);
-        let sent_in = self.stream(name, board, Dir::Written);
-        let got_in = self.stream(name, carto, Dir::Read);
-        // Carto → board is judged by the board's receive policy, board → Carto by the checksum
-        // the board sends: with matching settings, every error is corruption on the line.
-        let board = &self.loaded.profile.motor_board;
-        let out_policy = ChecksumPolicy::from(board.accept_checksum);
-        let in_policy = ChecksumPolicy::from(board.checksum);
-        LinkStats {
-            name: name.to_string(),
-            outbound: direction_stats(sent_out.len(), &got_out, proto, out_policy),
-            inbound: direction_stats(sent_in.len(), &got_in, proto, in_policy),
-        }
-    }
-
-    /// The Cute ⇄ Carto link. Cute's tracer sits before its fault injector, so what Carto
-    /// received (frames, framing errors) comes from Carto's own counters; what Cute received is
-    /// decoded per connection (a partial frame at a disconnect must not spill into the next).
-    fn gui_stats(&self) -> LinkStats {
+    /// Every link's bytes, frames and errors, read from counters kept as the run went: bytes from
+    /// each endpoint's tracer, frames and errors from the decoder of the endpoint that received
+    /// them (the board twins for what Carto sent, Carto for what the boards and Cute sent, Cute
+    /// for what Carto sent it, per connection). Nothing is decoded again here.
+    fn link_stats(&self) -> Vec<LinkStats> {
         let carto = self.carto.carto().stats();
-        let runtime = self.carto.stats();
-        let mut outbound = DirectionStats {
-            bytes: 0,
-            frames: carto.client_frames_in,
-            errors: carto.protocol_errors + carto.fatal_errors,
+        let motor_board = self.twin.motor_board().decoder_stats();
+        let sensor_board = self.twin.sensor_board().decoder_stats();
+        let motor = LinkStats {
+            name: "motor".to_string(),
+            outbound: DirectionStats {
+                bytes: self.traced("motor", "carto").written,
+                frames: motor_board.frames,
+                errors: motor_board.checksum_errors + motor_board.length_errors,
+            },
+            inbound: DirectionStats {
+                bytes: self.traced("motor", "board").written,
+                frames: carto.motor_frames_in,
+                errors: carto.motor_errors,
+            },
         };
-        let mut inbound = DirectionStats { bytes: runtime.client_bytes_out, frames: 0, errors: 0 };
-        for log in self.logs.iter().filter(|l| l.link == "gui") {
-            let sent = self.stream("gui", &log.endpoint, Dir::Written);
-            outbound.bytes += sent.len() as u64;
-            let got = self.stream("gui", &log.endpoint, Dir::Read);
-            let d = direction_stats(0, &got, Proto::Link, ChecksumPolicy::default());
-            inbound.frames += d.frames;
-            inbound.errors += d.errors;
-        }
-        LinkStats { name: "gui".to_string(), outbound, inbound }
+        let sensor = LinkStats {
+            name: "sensor".to_string(),
+            outbound: DirectionStats {
+                bytes: self.traced("sensor", "carto").written,
+                frames: sensor_board.frames,
+                errors: sensor_board.errors,
+            },
+            inbound: DirectionStats {
+                bytes: self.traced("sensor", "board").written,
+                frames: carto.sensor_frames_in,
+                errors: carto.sensor_errors,
+            },
+        };
+        // Cute's tracer sits before its fault injector: its written bytes are what Cute sent.
+        let cute = self.cute.cute.counters();
+        let gui = LinkStats {
+            name: "gui".to_string(),
+            outbound: DirectionStats {
+                bytes: self.cute.traces.iter().map(|h| h.totals().written).sum(),
+                frames: carto.client_frames_in,
+                errors: carto.protocol_errors + carto.fatal_errors,
+            },
+            inbound: DirectionStats {
+                bytes: self.carto.stats().client_bytes_out,
+                frames: cute.frames_in,
+                errors: cute.decode_errors,
+            },
+        };
+        vec![motor, sensor, gui]
     }
-}
-
-#[derive(Clone, Copy)]
-enum Proto {
-    Link,
-    Motor,
-    Sensor,
-}
-
-/// Counts the frames and errors a receiver finds in `received`.
-fn direction_stats(sent: usize, received: &[u8], proto: Proto, policy: ChecksumPolicy) -> DirectionStats {
-    let (frames, errors) = match proto {
-        Proto::Link => {
-            // One connection's bytes: a fatal framing error ends what can be decoded.
-            let mut d = link::Decoder::default();
-            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
-            (d.stats().frames, errors)
-        }
-        Proto::Motor => {
-            let mut d = protocol::motor::Decoder::new(policy);
-            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
-            (d.stats().frames, errors)
-        }
-        Proto::Sensor => {
-            let mut d = protocol::sensor::Decoder::new();
-            let errors = d.feed(received).iter().filter(|r| r.is_err()).count() as u64;
-            (d.stats().frames, errors)
-        }
-    };
-    DirectionStats { bytes: sent as u64, frames, errors }
 }

@@ -24,4 +24,4 @@ pub use pty::{PtyClient, PtyLink};
 #[cfg(unix)]
 pub use serial::{SerialLink, SerialLinkBuilder};
 pub use tcp::{TcpConnector, TcpLink, TcpListenerLink};
-pub use tracer::{Direction, TraceHandle, TraceRecord, Tracer};
+pub use tracer::{Direction, TraceHandle, TraceRecord, TraceTotals, Tracer};

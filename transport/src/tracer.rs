@@ -52,9 +52,25 @@ pub struct TraceRecord {
     pub bytes: Vec<u8>,
 }
 
-type Records = Arc<Mutex<Vec<TraceRecord>>>;
+/// Bytes that went through a traced link since it was made, per direction (taking the records
+/// does not reset them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct TraceTotals {
+    /// Bytes returned by `read`.
+    pub read: u64,
+    /// Bytes taken by `write`.
+    pub written: u64,
+}
 
-fn lock(records: &Records) -> MutexGuard<'_, Vec<TraceRecord>> {
+#[derive(Debug, Default)]
+struct Shared {
+    records: Vec<TraceRecord>,
+    totals: TraceTotals,
+}
+
+type Records = Arc<Mutex<Shared>>;
+
+fn lock(records: &Records) -> MutexGuard<'_, Shared> {
     records.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
@@ -67,12 +83,17 @@ pub struct TraceHandle {
 impl TraceHandle {
     /// Takes every record so far, leaving none.
     pub fn take(&self) -> Vec<TraceRecord> {
-        std::mem::take(&mut *lock(&self.records))
+        std::mem::take(&mut lock(&self.records).records)
     }
 
     /// How many records are waiting.
     pub fn len(&self) -> usize {
-        lock(&self.records).len()
+        lock(&self.records).records.len()
+    }
+
+    /// Bytes read and written so far, counted as they went through.
+    pub fn totals(&self) -> TraceTotals {
+        lock(&self.records).totals
     }
 
     /// Whether no records are waiting.
@@ -90,7 +111,7 @@ pub struct Tracer<L> {
 
 impl<L> std::fmt::Debug for Tracer<L> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Tracer").field("records", &lock(&self.records).len()).finish_non_exhaustive()
+        f.debug_struct("Tracer").field("records", &lock(&self.records).records.len()).finish_non_exhaustive()
     }
 }
 
@@ -102,7 +123,12 @@ impl<L: Link> Tracer<L> {
 
     /// Takes every record so far, leaving none.
     pub fn take_records(&mut self) -> Vec<TraceRecord> {
-        std::mem::take(&mut *lock(&self.records))
+        std::mem::take(&mut lock(&self.records).records)
+    }
+
+    /// Bytes read and written so far.
+    pub fn totals(&self) -> TraceTotals {
+        lock(&self.records).totals
     }
 
     /// A handle that can take the records from elsewhere.
@@ -130,7 +156,12 @@ impl<L: Link> Tracer<L> {
             return;
         }
         let at = self.clock.now();
-        let mut records = lock(&self.records);
+        let mut shared = lock(&self.records);
+        match direction {
+            Direction::Read => shared.totals.read += bytes.len() as u64,
+            Direction::Written => shared.totals.written += bytes.len() as u64,
+        }
+        let records = &mut shared.records;
         match records.last_mut() {
             Some(last) if last.at == at && last.direction == direction => {
                 last.bytes.extend_from_slice(bytes);
@@ -189,6 +220,9 @@ mod tests {
             ]
         );
         assert!(a.take_records().is_empty());
+        // Taking the records leaves the totals.
+        assert_eq!(a.totals(), TraceTotals { read: 4, written: 4 });
+        assert_eq!(a.handle().totals(), a.totals());
     }
 
     #[test]
