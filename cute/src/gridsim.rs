@@ -89,24 +89,14 @@ impl World {
 
     /// Row-major flags: true for every free cell 4-connected to `start` (empty if `start` is blocked).
     pub fn reachable_from(&self, start: (u8, u8)) -> Vec<bool> {
-        let mut seen = vec![false; self.rows * self.cols];
-        if self.is_blocked(usize::from(start.0), usize::from(start.1)) {
-            return seen;
-        }
-        let mut stack = vec![start];
-        seen[usize::from(start.0) * self.cols + usize::from(start.1)] = true;
-        while let Some(c) = stack.pop() {
-            for h in Heading::ALL {
-                if let Some(n) = h.step(c, self.rows, self.cols) {
-                    let i = usize::from(n.0) * self.cols + usize::from(n.1);
-                    if !seen[i] && !self.blocked[i] {
-                        seen[i] = true;
-                        stack.push(n);
-                    }
-                }
-            }
-        }
-        seen
+        let start = (usize::from(start.0), usize::from(start.1));
+        robot_model::grid::reachable(
+            self.rows,
+            self.cols,
+            start,
+            |(x, y)| !self.is_blocked(x, y),
+            |_, _| true,
+        )
     }
 }
 

@@ -300,6 +300,48 @@ impl TryFrom<link::Command> for Move {
     }
 }
 
+// ---- connectivity ----
+
+/// Every cell of a `rows × cols` grid that moves connect to `start`, row-major (`start` itself
+/// included when `open(start)`; all false otherwise). `open(cell)` says whether the robot may be
+/// in a cell, `can_move(from, to)` whether it may go between two 4-neighbours (both open).
+///
+/// ```
+/// use robot_model::grid::reachable;
+/// // a 1 × 3 corridor with a wall between columns 1 and 2
+/// let r = reachable(1, 3, (0, 0), |_| true, |a, b| !(a.1.max(b.1) == 2));
+/// assert_eq!(r, vec![true, true, false]);
+/// ```
+pub fn reachable(
+    rows: usize,
+    cols: usize,
+    start: (usize, usize),
+    open: impl Fn((usize, usize)) -> bool,
+    can_move: impl Fn((usize, usize), (usize, usize)) -> bool,
+) -> Vec<bool> {
+    let mut seen = vec![false; rows * cols];
+    if start.0 >= rows || start.1 >= cols || !open(start) {
+        return seen;
+    }
+    let mut queue = std::collections::VecDeque::from([start]);
+    seen[start.0 * cols + start.1] = true;
+    while let Some(cell) = queue.pop_front() {
+        for h in Heading::ALL {
+            let (dr, dc) = h.delta();
+            let (Some(r), Some(c)) =
+                (cell.0.checked_add_signed(dr as isize), cell.1.checked_add_signed(dc as isize))
+            else {
+                continue;
+            };
+            if r < rows && c < cols && !seen[r * cols + c] && open((r, c)) && can_move(cell, (r, c)) {
+                seen[r * cols + c] = true;
+                queue.push_back((r, c));
+            }
+        }
+    }
+    seen
+}
+
 // ---- where the grid lies in the world ----
 
 /// Largest grid side: coordinates travel as one byte on the link protocol.

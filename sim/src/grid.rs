@@ -5,8 +5,6 @@
 //! cell is **free** in the ground truth when its square lies inside the room and touches no
 //! obstacle; **reachable** cells are the free cells 4-connected to the start cell.
 
-use std::collections::VecDeque;
-
 use rapier2d::parry::bounding_volume::Aabb;
 use rapier2d::parry::math::{Pose, Vector};
 use rapier2d::parry::query;
@@ -75,22 +73,7 @@ impl TruthGrid {
 
     /// For every cell, whether it is free and 4-connected to `start`; row-major.
     pub fn reachable_from(&self, start: (usize, usize)) -> Vec<bool> {
-        let mut seen = vec![false; self.rows * self.cols];
-        if !self.is_free(start.0, start.1) {
-            return seen;
-        }
-        let mut queue = VecDeque::from([start]);
-        seen[start.0 * self.cols + start.1] = true;
-        while let Some((r, c)) = queue.pop_front() {
-            let neighbours = [(r.wrapping_sub(1), c), (r + 1, c), (r, c.wrapping_sub(1)), (r, c + 1)];
-            for (nr, nc) in neighbours {
-                if self.is_free(nr, nc) && !seen[nr * self.cols + nc] {
-                    seen[nr * self.cols + nc] = true;
-                    queue.push_back((nr, nc));
-                }
-            }
-        }
-        seen
+        robot_model::grid::reachable(self.rows, self.cols, start, |(r, c)| self.is_free(r, c), |_, _| true)
     }
 }
 
