@@ -668,6 +668,8 @@ impl Decoder {
     }
 }
 
+impl_decoder!(Decoder, GuiMessage, DecodeError, DecoderStats);
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -40,3 +40,31 @@ macro_rules! enum_with_unknown {
         }
     };
 }
+
+/// Implements [`crate::Decoder`] for a decoder type by delegating to its inherent `feed`, `stats`,
+/// `buffered` and `reset` (which callers use without importing the trait).
+macro_rules! impl_decoder {
+    ($decoder:ty, $frame:ty, $error:ty, $stats:ty) => {
+        impl $crate::decoder::Decoder for $decoder {
+            type Frame = $frame;
+            type Error = $error;
+            type Stats = $stats;
+
+            fn feed(&mut self, bytes: &[u8]) -> Vec<Result<$frame, $error>> {
+                <$decoder>::feed(self, bytes)
+            }
+
+            fn stats(&self) -> $stats {
+                <$decoder>::stats(self)
+            }
+
+            fn buffered(&self) -> usize {
+                <$decoder>::buffered(self)
+            }
+
+            fn reset(&mut self) {
+                <$decoder>::reset(self)
+            }
+        }
+    };
+}
