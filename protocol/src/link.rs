@@ -834,6 +834,21 @@ mod tests {
     }
 
     #[test]
+    fn test_code_enums_list_their_names() {
+        assert_eq!(
+            Command::NAMED,
+            &[
+                ("Forward", Command::Forward),
+                ("Right", Command::Right),
+                ("Left", Command::Left),
+                ("Stop", Command::Stop)
+            ]
+        );
+        assert_eq!(Direction::NAMED.len(), 4);
+        assert!(MsgType::NAMED.iter().all(|(_, code)| !matches!(code, MsgType::Unknown(_))));
+    }
+
+    #[test]
     fn test_code_enums_keep_unknown_values() {
         assert_eq!(Command::from(3), Command::Stop);
         assert_eq!(Command::from(7), Command::Unknown(7));

@@ -1,7 +1,8 @@
 //! Crate-internal macros.
 
 /// Declares a `Copy` code enum whose unrecognised wire values survive in an `Unknown(raw)`
-/// variant, with `From<raw>` and `From<enum>` conversions in both directions.
+/// variant, with `From<raw>` and `From<enum>` conversions in both directions, and a `NAMED` list
+/// of its named variants.
 ///
 /// `From<raw>` never yields `Unknown(v)` for a `v` that names a known variant; a hand-built
 /// `Unknown(v)` with such a `v` converts back to the same raw `v` (and so re-parses as the named
@@ -19,6 +20,12 @@ macro_rules! enum_with_unknown {
             $( $(#[$vattr])* $variant, )+
             /// A code this crate does not know; the raw wire value is kept.
             Unknown($repr),
+        }
+
+        impl $name {
+            /// Every named variant with its name as spelled in the source (`"Forward"`, …), in
+            /// declaration order: for command lines and UIs.
+            pub const NAMED: &'static [(&'static str, $name)] = &[$( (stringify!($variant), $name::$variant), )+];
         }
 
         impl ::core::convert::From<$repr> for $name {
