@@ -4,9 +4,13 @@
 #[macro_use]
 mod macros;
 
+pub mod decoder;
 pub mod link;
 pub mod motor;
+pub mod resync;
 pub mod sensor;
+
+pub use decoder::Decoder;
 
 /// A byte range inside a frame (start inclusive, end exclusive).
 pub type Field = core::ops::Range<usize>;

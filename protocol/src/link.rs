@@ -668,6 +668,8 @@ impl Decoder {
     }
 }
 
+impl_decoder!(Decoder, GuiMessage, DecodeError, DecoderStats);
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -829,6 +831,21 @@ mod tests {
         assert_eq!(MsgType::from_wire([0, 9]), (MsgType::Unknown(0x0009), None));
         assert_eq!(MsgType::from_wire([1, 1]), (MsgType::Unknown(0x0101), None));
         assert_eq!(MsgType::from_wire([9, 0]), (MsgType::Unknown(0x0900), None));
+    }
+
+    #[test]
+    fn test_code_enums_list_their_names() {
+        assert_eq!(
+            Command::NAMED,
+            &[
+                ("Forward", Command::Forward),
+                ("Right", Command::Right),
+                ("Left", Command::Left),
+                ("Stop", Command::Stop)
+            ]
+        );
+        assert_eq!(Direction::NAMED.len(), 4);
+        assert!(MsgType::NAMED.iter().all(|(_, code)| !matches!(code, MsgType::Unknown(_))));
     }
 
     #[test]

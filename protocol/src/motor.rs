@@ -46,7 +46,8 @@
 //! panics (it calls `check_len` itself); [`MotorPacket::emit`] never panics when the buffer is at
 //! least [`MotorPacket::buffer_len`] bytes, and writes exactly that many.
 //!
-//! **Streaming.** [`Decoder`] hunts for `0xAA`, waits for `LEN + 4` bytes (at most 259, its whole
+//! **Streaming.** [`Decoder`] is the shared [`Resync`] engine with the
+//! motor framing: it skips to the next `0xAA`, waits for `LEN + 4` bytes (at most 259, its whole
 //! buffer), then checks. A bad checksum or a bad length drops only the start byte: the bytes after
 //! it are scanned again, so a good frame hidden inside a corrupted one is still found. Recovery
 //! after garbage is therefore automatic; it fails only when a *false* frame (a stray `0xAA` in the
@@ -66,8 +67,7 @@
 //! assert_eq!(decoder.stats().bytes_skipped, 2);
 //! ```
 
-use core::fmt;
-use core::str::FromStr;
+use crate::resync::{self, Head, Report, Resync, ResyncStats};
 
 /// Byte ranges of the motor frame.
 pub mod field {
@@ -158,7 +158,24 @@ impl ChecksumKind {
 }
 
 /// What a receiver accepts as a checksum.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+///
+/// Its names, used in configuration files and on the command line, are derived from the variants
+/// (kebab-case): `sum`, `xor-payload`, `const-fc`, `ignore`. They drive `FromStr`, `Display`,
+/// [`ChecksumPolicy::name`] and [`ChecksumPolicy::NAMES`].
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    strum::EnumString,
+    strum::Display,
+    strum::IntoStaticStr,
+    strum::VariantNames,
+)]
+#[strum(serialize_all = "kebab-case", parse_err_ty = ParsePolicyError, parse_err_fn = ParsePolicyError::unknown)]
 pub enum ChecksumPolicy {
     /// Only the seed's sum (default).
     #[default]
@@ -172,6 +189,9 @@ pub enum ChecksumPolicy {
 }
 
 impl ChecksumPolicy {
+    /// Every policy's name, in declaration order (for `--help` and error messages).
+    pub const NAMES: &'static [&'static str] = <ChecksumPolicy as strum::VariantNames>::VARIANTS;
+
     /// The checksum kind this policy requires, `None` for `Ignore`.
     pub fn kind(self) -> Option<ChecksumKind> {
         match self {
@@ -184,18 +204,7 @@ impl ChecksumPolicy {
 
     /// The name used in configuration files and on the command line.
     pub fn name(self) -> &'static str {
-        match self {
-            ChecksumPolicy::Sum => "sum",
-            ChecksumPolicy::XorPayload => "xor-payload",
-            ChecksumPolicy::ConstFc => "const-fc",
-            ChecksumPolicy::Ignore => "ignore",
-        }
-    }
-}
-
-impl fmt::Display for ChecksumPolicy {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        self.into()
     }
 }
 
@@ -207,17 +216,9 @@ pub struct ParsePolicyError {
     pub input: String,
 }
 
-impl FromStr for ChecksumPolicy {
-    type Err = ParsePolicyError;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s {
-            "sum" => Ok(ChecksumPolicy::Sum),
-            "xor-payload" => Ok(ChecksumPolicy::XorPayload),
-            "const-fc" => Ok(ChecksumPolicy::ConstFc),
-            "ignore" => Ok(ChecksumPolicy::Ignore),
-            other => Err(ParsePolicyError { input: other.to_owned() }),
-        }
+impl ParsePolicyError {
+    fn unknown(input: &str) -> Self {
+        ParsePolicyError { input: input.to_owned() }
     }
 }
 
@@ -685,11 +686,14 @@ impl MotorPacket {
 /// Counters kept by a [`Decoder`] since it was made.
 ///
 /// Every byte fed ends up in exactly one place: a decoded frame, a rejected frame's start byte or
-/// a skipped byte (both in `bytes_skipped`), or the pending buffer ([`Decoder::buffered`]).
+/// a skipped byte (both in `bytes_skipped`), or the pending buffer ([`Decoder::buffered`]). The
+/// five counters shared with [`ResyncStats`] come from the engine; the others are the motor's own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DecoderStats {
     /// Packets decoded (`Ok` items, `Unknown` included).
     pub frames: u64,
+    /// Frames rejected (`Err` items), whatever the reason.
+    pub errors: u64,
     /// Frames rejected for their checksum.
     pub checksum_errors: u64,
     /// Frames rejected for a payload length their type cannot have.
@@ -704,133 +708,96 @@ pub struct DecoderStats {
     pub bytes: u64,
 }
 
-/// Sans-IO streaming decoder for motor frames.
+impl From<DecoderStats> for ResyncStats {
+    fn from(stats: DecoderStats) -> ResyncStats {
+        let DecoderStats { frames, errors, bytes_skipped, bytes_in_frames, bytes, .. } = stats;
+        ResyncStats { frames, errors, bytes_skipped, bytes_in_frames, bytes }
+    }
+}
+
+/// The motor framing for the [`Resync`] engine: skip to the next 0xAA, wait for `LEN + 4` bytes,
+/// parse with the checksum policy, report every rejection.
+#[derive(Debug, Clone, Copy, Default)]
+struct MotorFraming {
+    policy: ChecksumPolicy,
+}
+
+impl resync::Framing for MotorFraming {
+    type Frame = MotorPacket;
+    type Error = DecodeError;
+    const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+    const REPORT: Report = Report::EveryRejection;
+
+    fn head(&self, bytes: &[u8]) -> Head<DecodeError> {
+        if bytes.first() != Some(&SYNC) {
+            return Head::Skip(bytes.iter().position(|b| *b == SYNC).unwrap_or(bytes.len()));
+        }
+        let Some(len) = bytes.get(field::LEN) else {
+            return Head::Partial { need: field::LEN + 1 };
+        };
+        let total = usize::from(*len) + field::OVERHEAD;
+        if bytes.len() >= total { Head::Complete(total) } else { Head::Partial { need: total } }
+    }
+
+    fn parse(&self, frame: &[u8]) -> Result<MotorPacket, DecodeError> {
+        MotorPacket::parse(&Frame::new_unchecked(frame), self.policy)
+    }
+}
+
+/// Sans-IO streaming decoder for motor frames: the shared [`Resync`] engine with the motor
+/// framing, plus the motor's own counters.
 ///
 /// Its buffer holds at most one candidate frame ([`MAX_FRAME_LEN`] bytes).
 #[derive(Debug, Clone, Default)]
 pub struct Decoder {
-    policy: ChecksumPolicy,
-    buffer: Vec<u8>,
-    stats: DecoderStats,
+    engine: Resync<MotorFraming>,
+    /// Only the motor's own counters are kept here; the rest come from `engine`.
+    own: DecoderStats,
 }
-
-type Items = Vec<Result<MotorPacket, DecodeError>>;
 
 impl Decoder {
     /// A decoder checking checksums with `policy`.
     pub fn new(policy: ChecksumPolicy) -> Self {
-        Decoder { policy, buffer: Vec::with_capacity(MAX_FRAME_LEN), stats: DecoderStats::default() }
+        Decoder { engine: Resync::new(MotorFraming { policy }), own: DecoderStats::default() }
     }
 
     /// The checksum policy.
     pub fn policy(&self) -> ChecksumPolicy {
-        self.policy
+        self.engine.framing().policy
     }
 
     /// Consumes all of `bytes` and returns every packet or error they complete, in order.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<Result<MotorPacket, DecodeError>> {
-        let mut out = Vec::new();
-        self.stats.bytes += bytes.len() as u64;
-        let mut input = bytes;
-        while !input.is_empty() {
-            if self.buffer.is_empty() {
-                self.scan(input, &mut out);
-                break;
-            }
-            // Complete the buffered candidate.
-            let need = match self.buffer.get(field::LEN) {
-                Some(len) => usize::from(*len) + field::OVERHEAD,
-                None => field::LEN + 1,
-            };
-            let take = need.saturating_sub(self.buffer.len()).min(input.len());
-            self.buffer.extend_from_slice(&input[..take]);
-            input = &input[take..];
-            let complete = match self.buffer.get(field::LEN) {
-                Some(len) => self.buffer.len() == usize::from(*len) + field::OVERHEAD,
-                None => false,
-            };
-            if complete {
-                let candidate = core::mem::take(&mut self.buffer);
-                if !self.check(&candidate, &mut out) {
-                    // Rejected: everything after its start byte is scanned again.
-                    self.scan(&candidate[1..], &mut out);
-                }
-                if self.buffer.is_empty() {
-                    self.buffer = candidate;
-                    self.buffer.clear();
-                }
+        let items = self.engine.feed(bytes);
+        for item in &items {
+            match item {
+                Ok(MotorPacket::Unknown { .. }) => self.own.unknown_types += 1,
+                Err(DecodeError::BadChecksum { .. }) => self.own.checksum_errors += 1,
+                Err(DecodeError::BadLength { .. }) => self.own.length_errors += 1,
+                _ => {}
             }
         }
-        out
+        items
     }
 
     /// Counters since creation (not cleared by `reset`).
     pub fn stats(&self) -> DecoderStats {
-        self.stats
+        let ResyncStats { frames, errors, bytes_skipped, bytes_in_frames, bytes } = self.engine.stats();
+        DecoderStats { frames, errors, bytes_skipped, bytes_in_frames, bytes, ..self.own }
     }
 
     /// Bytes of a candidate frame held, waiting for the rest.
     pub fn buffered(&self) -> usize {
-        self.buffer.len()
+        self.engine.buffered()
     }
 
     /// Drops any partial candidate.
     pub fn reset(&mut self) {
-        self.buffer.clear();
-    }
-
-    /// Decodes whole frames straight from `input`; keeps a trailing partial candidate.
-    ///
-    /// Called with an empty buffer only.
-    fn scan(&mut self, mut input: &[u8], out: &mut Items) {
-        loop {
-            let Some(start) = input.iter().position(|b| *b == SYNC) else {
-                self.stats.bytes_skipped += input.len() as u64;
-                return;
-            };
-            self.stats.bytes_skipped += start as u64;
-            input = &input[start..];
-            let total = match input.get(field::LEN) {
-                Some(len) => usize::from(*len) + field::OVERHEAD,
-                None => MAX_FRAME_LEN + 1,
-            };
-            if input.len() < total {
-                self.buffer.extend_from_slice(input);
-                return;
-            }
-            if self.check(&input[..total], out) {
-                input = &input[total..];
-            } else {
-                input = &input[1..];
-            }
-        }
-    }
-
-    /// Parses one whole candidate; returns true when it was accepted.
-    fn check(&mut self, bytes: &[u8], out: &mut Items) -> bool {
-        match MotorPacket::parse(&Frame::new_unchecked(bytes), self.policy) {
-            Ok(packet) => {
-                self.stats.frames += 1;
-                self.stats.bytes_in_frames += bytes.len() as u64;
-                if matches!(packet, MotorPacket::Unknown { .. }) {
-                    self.stats.unknown_types += 1;
-                }
-                out.push(Ok(packet));
-                true
-            }
-            Err(error) => {
-                match error {
-                    DecodeError::BadChecksum { .. } => self.stats.checksum_errors += 1,
-                    DecodeError::BadLength { .. } => self.stats.length_errors += 1,
-                    _ => {}
-                }
-                self.stats.bytes_skipped += 1;
-                out.push(Err(error));
-                false
-            }
-        }
+        self.engine.reset();
     }
 }
+
+impl_decoder!(Decoder, MotorPacket, DecodeError, DecoderStats);
 
 #[cfg(test)]
 mod tests {
@@ -1077,6 +1044,24 @@ mod tests {
         assert_eq!("ignore".parse(), Ok(ChecksumPolicy::Ignore));
         assert_eq!("crc".parse::<ChecksumPolicy>(), Err(ParsePolicyError { input: "crc".to_owned() }));
         assert_eq!(ChecksumPolicy::default(), ChecksumPolicy::Sum);
+    }
+
+    #[test]
+    fn test_decoder_errors_count_every_rejected_frame() {
+        let mut bad_checksum = SEED_DRIVE_V1;
+        bad_checksum[6] = 0x0B;
+        // Drive v2 with LEN 3. CK = 03+10+01+02+03 (see `test_bad_lengths`).
+        let bad_length = [0xAA, 0x03, 0x10, 0x01, 0x02, 0x03, 0x19];
+        let stream = [&bad_checksum[..], &bad_length, &SEED_DRIVE_V1].concat();
+        let mut decoder = Decoder::new(ChecksumPolicy::Sum);
+        let out = decoder.feed(&stream);
+        assert_eq!(out.iter().filter(|item| item.is_err()).count(), 2, "{out:?}");
+        let stats = decoder.stats();
+        assert_eq!((stats.errors, stats.checksum_errors, stats.length_errors, stats.frames), (2, 1, 1, 1));
+        assert_eq!(
+            ResyncStats::from(stats),
+            ResyncStats { frames: 1, errors: 2, bytes_skipped: 14, bytes_in_frames: 7, bytes: 21 }
+        );
     }
 
     #[test]

@@ -40,10 +40,11 @@
 //! never panics when the buffer is at least [`SensorPacket::buffer_len`] bytes.
 //!
 //! **Streaming and what recovery is possible.** Without a sync byte or checksum, the only
-//! evidence of framing is the header's consistency. [`Decoder`] accepts a candidate at the current
-//! position when TYPE is 1 or 2 with LEN 3, or TYPE 3 with a known sensor type, LEN = 4 +
-//! data_len and the data_len byte equal to that sensor type's length (so no valid frame is longer
-//! than 42 bytes, the decoder's whole buffer). Otherwise it drops **one** byte and retries at the
+//! evidence of framing is the header's consistency. [`Decoder`] is the shared [`Resync`] engine
+//! with the sensor framing: it accepts a candidate at the current position when TYPE is 1 or 2
+//! with LEN 3, or TYPE 3 with a known sensor type, LEN = 4 + data_len and the data_len byte equal
+//! to that sensor type's length (so no valid frame is longer than 42 bytes, the decoder's whole
+//! buffer). Otherwise it drops **one** byte and retries at the
 //! next position. Field *values* are not checked (unknown status, command id, direction or switch
 //! state are kept as `Unknown`).
 //!
@@ -77,6 +78,8 @@
 //! assert_eq!(items[1], Ok(distance));
 //! assert_eq!(decoder.stats().bytes_skipped, 2);
 //! ```
+
+use crate::resync::{self, Head, Report, Resync, ResyncStats};
 
 /// Byte ranges of the sensor frame.
 pub mod field {
@@ -710,41 +713,21 @@ impl SensorPacket {
     }
 }
 
-/// Counters kept by a [`Decoder`] since it was made.
+/// Counters kept by a [`Decoder`] since it was made: the shared engine's.
 ///
 /// Every byte fed ends up in exactly one place: a decoded frame (`bytes_in_frames`), a dropped
-/// byte (`bytes_skipped`) or the pending buffer ([`Decoder::buffered`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct DecoderStats {
-    /// Packets decoded.
-    pub frames: u64,
-    /// Losses of sync reported (one `Err` each).
-    pub errors: u64,
-    /// Bytes dropped one at a time while looking for a consistent header.
-    pub bytes_skipped: u64,
-    /// Bytes decoded as part of accepted frames.
-    pub bytes_in_frames: u64,
-    /// Bytes fed in total.
-    pub bytes: u64,
-}
+/// byte (`bytes_skipped`) or the pending buffer ([`Decoder::buffered`]). `errors` counts losses of
+/// sync reported (one `Err` each).
+pub type DecoderStats = ResyncStats;
 
-/// Sans-IO streaming decoder for sensor frames; see the module doc for its recovery rules.
+/// Sans-IO streaming decoder for sensor frames: the shared [`Resync`] engine with the sensor
+/// framing. See the module doc for its recovery rules.
 ///
 /// Its buffer holds at most one candidate frame ([`MAX_FRAME_LEN`] bytes).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct Decoder {
-    buffer: Vec<u8>,
-    in_sync: bool,
-    stats: DecoderStats,
+    engine: Resync<SensorFraming>,
 }
-
-impl Default for Decoder {
-    fn default() -> Self {
-        Decoder::new()
-    }
-}
-
-type Items = Vec<Result<SensorPacket, DecodeError>>;
 
 /// What the bytes at the current position say about a frame starting there.
 enum Candidate {
@@ -805,120 +788,61 @@ fn candidate(prefix: &[u8]) -> Candidate {
     if prefix.len() >= total { Candidate::Complete(total) } else { Candidate::Partial }
 }
 
+/// The sensor framing for the [`Resync`] engine: a consistent header ([`candidate`]) or drop one
+/// byte, one `Err` per loss of sync.
+#[derive(Debug, Clone, Copy, Default)]
+struct SensorFraming;
+
+impl resync::Framing for SensorFraming {
+    type Frame = SensorPacket;
+    type Error = DecodeError;
+    const MAX_FRAME_LEN: usize = MAX_FRAME_LEN;
+    const REPORT: Report = Report::OncePerLossOfSync;
+
+    fn head(&self, bytes: &[u8]) -> Head<DecodeError> {
+        match candidate(bytes) {
+            // `candidate` judges the header byte by byte: ask for one more.
+            Candidate::Partial => Head::Partial { need: bytes.len() + 1 },
+            Candidate::Complete(total) => Head::Complete(total),
+            Candidate::Reject(error) => Head::Reject(error),
+        }
+    }
+
+    fn parse(&self, frame: &[u8]) -> Result<SensorPacket, DecodeError> {
+        // Never fails while `candidate` and `parse` agree; a failure is a rejection anyway.
+        SensorPacket::parse(&Frame::new_unchecked(frame))
+    }
+}
+
 impl Decoder {
     /// A decoder that assumes the stream starts on a frame boundary.
     pub fn new() -> Self {
-        Decoder { buffer: Vec::with_capacity(MAX_FRAME_LEN), in_sync: true, stats: DecoderStats::default() }
+        Decoder { engine: Resync::new(SensorFraming) }
     }
 
     /// Consumes all of `bytes` and returns every packet they complete, plus one error per loss
     /// of sync, in order.
     pub fn feed(&mut self, bytes: &[u8]) -> Vec<Result<SensorPacket, DecodeError>> {
-        let mut out = Vec::new();
-        self.stats.bytes += bytes.len() as u64;
-        let mut input = bytes;
-        while !input.is_empty() {
-            if self.buffer.is_empty() {
-                self.scan(input, &mut out);
-                break;
-            }
-            // Grow the pending candidate one byte at a time until it is judged.
-            self.buffer.push(input[0]);
-            input = &input[1..];
-            match candidate(&self.buffer) {
-                Candidate::Partial => {}
-                Candidate::Complete(total) => {
-                    let pending = core::mem::take(&mut self.buffer);
-                    if !self.accept(&pending[..total], &mut out) {
-                        self.scan(&pending[1..], &mut out);
-                    }
-                    self.recycle(pending);
-                }
-                Candidate::Reject(error) => {
-                    let pending = core::mem::take(&mut self.buffer);
-                    self.skip(error, &mut out);
-                    self.scan(&pending[1..], &mut out);
-                    self.recycle(pending);
-                }
-            }
-        }
-        out
+        self.engine.feed(bytes)
     }
 
     /// Counters since creation.
     pub fn stats(&self) -> DecoderStats {
-        self.stats
+        self.engine.stats()
     }
 
     /// Bytes of a candidate frame held, waiting for the rest.
     pub fn buffered(&self) -> usize {
-        self.buffer.len()
+        self.engine.buffered()
     }
 
     /// Drops any pending candidate and assumes the next byte starts a frame.
     pub fn reset(&mut self) {
-        self.buffer.clear();
-        self.in_sync = true;
-    }
-
-    /// Decodes whole frames straight from `input`; keeps a trailing partial candidate.
-    ///
-    /// Called with an empty buffer only.
-    fn scan(&mut self, mut input: &[u8], out: &mut Items) {
-        while !input.is_empty() {
-            match candidate(input) {
-                Candidate::Partial => {
-                    self.buffer.extend_from_slice(input);
-                    return;
-                }
-                Candidate::Complete(total) => {
-                    if self.accept(&input[..total], out) {
-                        input = &input[total..];
-                    } else {
-                        input = &input[1..];
-                    }
-                }
-                Candidate::Reject(error) => {
-                    self.skip(error, out);
-                    input = &input[1..];
-                }
-            }
-        }
-    }
-
-    fn accept(&mut self, bytes: &[u8], out: &mut Items) -> bool {
-        match SensorPacket::parse(&Frame::new_unchecked(bytes)) {
-            Ok(packet) => {
-                self.in_sync = true;
-                self.stats.frames += 1;
-                self.stats.bytes_in_frames += bytes.len() as u64;
-                out.push(Ok(packet));
-                true
-            }
-            // Unreachable while `candidate` and `parse` agree; handled as a rejection anyway.
-            Err(error) => {
-                self.skip(error, out);
-                false
-            }
-        }
-    }
-
-    fn skip(&mut self, error: DecodeError, out: &mut Items) {
-        self.stats.bytes_skipped += 1;
-        if self.in_sync {
-            self.in_sync = false;
-            self.stats.errors += 1;
-            out.push(Err(error));
-        }
-    }
-
-    fn recycle(&mut self, mut pending: Vec<u8>) {
-        if self.buffer.is_empty() {
-            pending.clear();
-            self.buffer = pending;
-        }
+        self.engine.reset();
     }
 }
+
+impl_decoder!(Decoder, SensorPacket, DecodeError, DecoderStats);
 
 #[cfg(test)]
 mod tests {

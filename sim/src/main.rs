@@ -7,7 +7,6 @@ use std::time::Instant as WallInstant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
-use protocol::motor::ChecksumPolicy;
 use sim::app::{Mode, Sim, make_app};
 use sim::bench::{self, SonarLoad};
 use sim::mapimg::MapPicture;
@@ -15,7 +14,7 @@ use sim::record::{FORMAT_VERSION, Recording, first_divergence};
 use sim::report::Report;
 use sim::runner::Lockstep;
 use sim::scenario::LoadedScenario;
-use sim::wiretool::{self, Protocol};
+use sim::wiretool;
 
 #[derive(Parser)]
 #[command(
@@ -91,29 +90,9 @@ enum Command {
         status_every: f64,
     },
     /// Decode frames from hex bytes: each frame, resync notes, checksum verdicts.
-    Decode {
-        /// Which wire format.
-        #[arg(long, value_enum)]
-        protocol: Protocol,
-        /// Motor-link checksum policy: sum, xor-payload, const-fc, ignore.
-        #[arg(long, default_value = "sum")]
-        checksum: ChecksumPolicy,
-        /// Hex bytes, e.g. `AA 03 01 80 80 06 0A` (any separators).
-        #[arg(required = true, num_args = 1..)]
-        hex: Vec<String>,
-    },
+    Decode(wiretool::DecodeArgs),
     /// Encode one frame and print it as hex, e.g. `encode --protocol motor drive-v2 50 0 -20 6`.
-    Encode {
-        /// Which wire format.
-        #[arg(long, value_enum)]
-        protocol: Protocol,
-        /// Write the link `Msg` little-endian, as the 2024 Cute did.
-        #[arg(long)]
-        little_endian: bool,
-        /// The message and its arguments (see `sim::wiretool::encode` docs).
-        #[arg(required = true, num_args = 1.., allow_hyphen_values = true)]
-        words: Vec<String>,
-    },
+    Encode(wiretool::EncodeArgs),
     /// Re-run a recording (links.rec) and report the first byte where the new run differs.
     Replay {
         /// The recording.
@@ -179,19 +158,14 @@ fn main() -> ExitCode {
         Command::Sim { scenario, serve: _, tcp, bind, run_dir, speed, duration, seed, status_every } => {
             sim_serve(scenario.as_deref(), tcp, &bind, run_dir, speed, duration, seed, status_every)
         }
-        Command::Decode { protocol, checksum, hex } => {
-            wiretool::decode_hex(protocol, &hex.join(" "), checksum).map_err(anyhow::Error::msg).map(|text| {
-                print!("{text}");
-                ExitCode::SUCCESS
-            })
-        }
-        Command::Encode { protocol, little_endian, words } => {
-            let words: Vec<&str> = words.iter().map(String::as_str).collect();
-            wiretool::encode(protocol, &words, little_endian).map_err(anyhow::Error::msg).map(|bytes| {
-                println!("{}", wiretool::to_hex(&bytes));
-                ExitCode::SUCCESS
-            })
-        }
+        Command::Decode(args) => args.decode().map_err(anyhow::Error::from).map(|text| {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }),
+        Command::Encode(args) => args.encode().map_err(anyhow::Error::from).map(|bytes| {
+            println!("{}", wiretool::to_hex(&bytes));
+            ExitCode::SUCCESS
+        }),
         Command::Replay { recording } => replay(&recording),
         Command::Bench { scenarios, steps, rounds, physics_only } => {
             bench_cmd(&scenarios, steps, rounds, physics_only)
