@@ -4,6 +4,7 @@ pub mod app;
 pub mod bench;
 pub mod body;
 pub mod drive;
+pub mod generate;
 pub mod grid;
 pub mod mapimg;
 pub mod record;

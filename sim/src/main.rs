@@ -119,6 +119,9 @@ enum Command {
         #[arg(required = true)]
         scenarios: Vec<PathBuf>,
     },
+    /// Write a realistic generated room (flat, office, warehouse, pillars, irregular) as a
+    /// scenario file; the same style and seed always give the same file.
+    Generate(sim::generate::GenerateArgs),
 }
 
 /// Window screenshots (tests, docs).
@@ -171,6 +174,7 @@ fn main() -> ExitCode {
             bench_cmd(&scenarios, steps, rounds, physics_only)
         }
         Command::Check { scenarios } => check(&scenarios),
+        Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
     };
     match result {
         Ok(code) => code,
