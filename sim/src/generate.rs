@@ -46,8 +46,10 @@
 //!   the largest connected free area (where a user puts the robot down, not inside a closet).
 //!   When a draw has none, the next sub-seed is drawn.
 //! - The mission is `[StartCartography, WaitUntilMapped]`; expectations are coverage ≥ 0.98,
-//!   accuracy ≥ 0.95, no collision, and 18 s per m² of floor (30 minutes for 10 × 10 m, at
-//!   least 5 minutes) as both the finish limit and the run's time limit.
+//!   accuracy ≥ 0.95, no collision, and 40 s per m² of floor (about 67 minutes for 10 × 10 m,
+//!   at least 5 minutes) as both the finish limit and the run's time limit: Carto needs 2–4 s
+//!   per 0.30 m cell today, so the limit catches runs that hang without making speed a hidden
+//!   pass criterion.
 //! - Beds and sofas are drawn solid: the twin is 2-D and their frames sit at sonar height.
 //!
 //! ```
@@ -79,8 +81,10 @@ use crate::scenario::{
 
 /// Sub-seeds tried for one (style, seed) before giving up.
 const MAX_SUB_SEEDS: u32 = 64;
-/// Mission time allowed per square metre of floor: 30 minutes for a 10 × 10 m room.
-const SECONDS_PER_M2: f64 = 18.0;
+/// Mission time allowed per square metre of floor: about 67 minutes for a 10 × 10 m room. Carto
+/// needs 2–4 s per 0.30 m cell today (0.09 m²), so this is a limit for runs that hang, not a
+/// criterion a sound mission has to race against.
+const SECONDS_PER_M2: f64 = 40.0;
 /// The shortest mission time limit, seconds.
 const MIN_FINISH_S: f64 = 300.0;
 /// Depth kept clear on each side of a doorway so a person can walk through, metres.
@@ -1943,7 +1947,9 @@ mod tests {
             let area = f64::from(polygon_area(&sc.room).abs());
             let limit = sc.expect.finish_within_s.unwrap();
             assert!(
-                limit >= 300.0 && limit >= 18.0 * area && limit < 18.0 * area + 300.0,
+                limit >= MIN_FINISH_S
+                    && limit >= SECONDS_PER_M2 * area
+                    && limit < SECONDS_PER_M2 * area + MIN_FINISH_S,
                 "{label}: {limit} s"
             );
             assert_eq!(f64::from(sc.physics.max_sim_s), limit);
@@ -2063,7 +2069,7 @@ mod tests {
         let (mut total, mut aligned) = (0, 0);
         for s in corpus() {
             let sc = s.room.scenario();
-            let frame = GridFrame::for_room(&sc.room, RobotProfile::default().grid_cell_m);
+            let frame = grid::room_frame(&sc.room, RobotProfile::default().grid_cell_m);
             let flags: Vec<bool> = sc.obstacles.iter().map(|o| on_grid(&frame, o)).collect();
             assert!(flags.iter().any(|a| !a), "{}: every obstacle is on the grid", id(s));
             total += flags.len();

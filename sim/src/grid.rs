@@ -99,6 +99,12 @@ pub fn room_extent(room: &[(f32, f32)]) -> (f32, f32) {
     ((aabb.maxs.x - aabb.mins.x).max(0.0), (aabb.maxs.y - aabb.mins.y).max(0.0))
 }
 
+/// Whether (x, y) lies inside the polygon `poly` (parry's [`point_in_poly2d`]; converts the
+/// polygon on every call: for many points, convert once with [`room_points`]).
+pub fn point_in_polygon(poly: &[(f32, f32)], x: f32, y: f32) -> bool {
+    point_in_poly2d(Vector::new(x, y), &room_points(poly))
+}
+
 /// A polygon's corners as parry points, for [`point_in_poly2d`].
 pub fn room_points(room: &[(f32, f32)]) -> Vec<Vector> {
     room.iter().map(|&(x, y)| Vector::new(x, y)).collect()
