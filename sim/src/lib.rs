@@ -6,6 +6,7 @@ pub mod body;
 pub mod drive;
 pub mod generate;
 pub mod grid;
+pub mod localisation;
 pub mod mapimg;
 pub mod record;
 pub mod report;
