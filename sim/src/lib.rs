@@ -6,6 +6,7 @@ pub mod body;
 pub mod drive;
 pub mod grid;
 pub mod mapimg;
+pub mod mission;
 pub mod record;
 pub mod report;
 pub mod runner;
