@@ -60,7 +60,7 @@
 //! ```
 
 use protocol::link::GuiMessage;
-use robot_model::grid::Heading;
+use robot_model::grid::{Heading, Move};
 use robot_model::time::Instant;
 use tracing::{debug, info, warn};
 
@@ -79,7 +79,6 @@ use crate::map::{CellValue, Map};
 use crate::trajectory::{PlanError, Planner};
 use connection::Connection;
 use mission::{Answer, Belief, Mapping, Mission, Moving, Next, Obstacle};
-use robot_model::grid::Move;
 
 /// The Cute side of the link: map, robot, missions and the protocol state machine.
 #[derive(Debug, Clone)]
