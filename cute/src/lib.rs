@@ -6,11 +6,13 @@ pub mod gridsim;
 #[cfg(feature = "window")]
 pub mod gui;
 pub mod map;
+pub mod runtime;
 pub mod session;
 pub mod trajectory;
 
 pub use astar::{AStar, Grid, Path, TieBreak};
 pub use cartography::{Cartographer, MoveResult};
 pub use map::{CellValue, Map, MapError};
+pub use runtime::{CuteRuntime, Plain, Wrap};
 pub use session::{Compat, Cute, CuteConfig, CuteError, CuteEvent, Status};
 pub use trajectory::{PlanError, Planner, Trajectory};

@@ -1,8 +1,8 @@
 //! `cute`: the operator's window on a running Carto, over TCP, in real time.
 //!
-//! A thin layer over the library: a [`Cute`] session, a [`TcpConnector`] dialling Carto with the
-//! session's back-off, one Bevy system moving bytes between the socket and the session on the
-//! wall clock, and [`CutePlugin`] for the map and the buttons.
+//! A thin layer over the library: a [`CuteRuntime`] dialling Carto with a [`TcpConnector`] (the
+//! session's back-off), pumped by one Bevy system on the wall clock, and [`CutePlugin`] for the
+//! map and the buttons.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -15,10 +15,10 @@ use clap::Parser;
 use cute::gui::{
     AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, continuous_updates, setup_camera, window_plugins,
 };
-use cute::{Compat, Cute, CuteConfig};
+use cute::{Compat, Cute, CuteConfig, CuteRuntime};
 use robot_model::grid::Heading;
 use robot_model::time::Instant;
-use transport::{Clock, Connector, Link, TcpConnector, TcpLink, WallClock};
+use transport::{Clock, TcpConnector, WallClock};
 
 /// How long one connection attempt may block the frame.
 const CONNECT_TIMEOUT: std::time::Duration = std::time::Duration::from_millis(200);
@@ -29,9 +29,9 @@ struct Cli {
     /// Carto's address, HOST:PORT (e.g. 127.0.0.1:12345).
     #[arg(long, value_name = "HOST:PORT")]
     connect: String,
-    /// Talk to the original 2024 Carto: `explobot-2024`.
-    #[arg(long, value_name = "MODE")]
-    compat: Option<String>,
+    /// Which Carto is on the other end (`explobot-2024`: the original 2024 Carto).
+    #[arg(long, value_enum, value_name = "MODE", default_value_t = Compat::Default)]
+    compat: Compat,
     /// Map rows.
     #[arg(long, default_value_t = 20)]
     rows: usize,
@@ -58,24 +58,20 @@ struct Cli {
     screenshot_after: f64,
 }
 
-/// The session and its socket.
+/// The session, its socket and the wall clock.
 #[derive(Resource)]
 struct Remote {
-    cute: Cute,
-    connector: TcpConnector,
-    link: Option<TcpLink>,
+    runtime: CuteRuntime<TcpConnector>,
     clock: WallClock,
-    unsent: Vec<u8>,
-    last_error: Option<String>,
     start_cartography: bool,
 }
 
 impl CuteAccess for Remote {
     fn cute(&self) -> &Cute {
-        &self.cute
+        self.runtime.cute()
     }
     fn cute_mut(&mut self) -> &mut Cute {
-        &mut self.cute
+        self.runtime.cute_mut()
     }
 }
 
@@ -84,73 +80,18 @@ impl Remote {
         self.clock.now()
     }
 
-    fn drop_link(&mut self, now: Instant) {
-        if self.link.take().is_some() {
-            self.unsent.clear();
-            self.cute.on_disconnected(now);
-        }
-    }
-
-    /// One frame of I/O: connect when due, read, poll, write.
+    /// One frame of I/O; `--cartography` starts mapping once Carto has acknowledged the position.
     fn pump(&mut self) {
         let now = self.now();
-        if self.link.is_none() && self.cute.next_connect_at(now).is_some_and(|at| now >= at) {
-            match self.connector.connect() {
-                Ok(link) => {
-                    tracing::info!(peer = link.peer_addr(), "connected");
-                    self.last_error = None;
-                    self.link = Some(link);
-                    self.cute.on_connected(now);
-                }
-                Err(e) => {
-                    let text = e.to_string();
-                    if self.last_error.as_deref() != Some(text.as_str()) {
-                        tracing::warn!("{text}");
-                        self.last_error = Some(text);
-                    }
-                    self.cute.on_connect_failed(now);
+        let start = &mut self.start_cartography;
+        self.runtime.step_with(now, |cute| {
+            if *start && cute.is_ready() {
+                *start = false;
+                if let Err(e) = cute.start_cartography() {
+                    tracing::warn!("cannot start cartography: {e}");
                 }
             }
-        }
-        let mut incoming = Vec::new();
-        let mut alive = true;
-        if let Some(link) = self.link.as_mut()
-            && let Err(e) = link.read_available(&mut incoming)
-        {
-            tracing::warn!("{e}");
-            alive = false;
-        }
-        if !incoming.is_empty() {
-            self.cute.on_bytes(now, &incoming);
-        }
-        if !alive || self.cute.close_requested() {
-            self.drop_link(now);
-        }
-        if self.start_cartography && self.cute.is_ready() {
-            self.start_cartography = false;
-            if let Err(e) = self.cute.start_cartography() {
-                tracing::warn!("cannot start cartography: {e}");
-            }
-        }
-        self.cute.poll(now);
-        let out = self.cute.take_outgoing();
-        if self.link.is_none() {
-            return;
-        }
-        self.unsent.extend_from_slice(&out);
-        if let Some(link) = self.link.as_mut()
-            && !self.unsent.is_empty()
-        {
-            match link.write(&self.unsent) {
-                Ok(n) => {
-                    self.unsent.drain(..n);
-                }
-                Err(e) => {
-                    tracing::warn!("{e}");
-                    self.drop_link(now);
-                }
-            }
-        }
+        });
     }
 }
 
@@ -168,26 +109,19 @@ fn screenshot_when_due(remote: Res<Remote>, after: Res<ScreenshotAfter>, mut sho
 struct ScreenshotAfter(f64);
 
 fn run(cli: Cli) -> Result<ExitCode> {
-    let compat = match cli.compat.as_deref() {
-        Some(name) => name.parse::<Compat>()?,
-        None => Compat::Default,
-    };
     let cute = Cute::new(CuteConfig {
         rows: cli.rows,
         cols: cli.cols,
         start: (cli.start_row, cli.start_col),
         heading: cli.heading,
-        compat,
+        compat: cli.compat,
         ..CuteConfig::default()
     })
     .context("bad map settings")?;
+    let connector = TcpConnector::new(cli.connect.clone()).timeout(CONNECT_TIMEOUT);
     let remote = Remote {
-        cute,
-        connector: TcpConnector::new(cli.connect.clone()).timeout(CONNECT_TIMEOUT),
-        link: None,
+        runtime: CuteRuntime::new(cute, connector),
         clock: WallClock::start(),
-        unsent: Vec::new(),
-        last_error: None,
         start_cartography: cli.cartography,
     };
     let mut app = App::new();

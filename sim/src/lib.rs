@@ -8,6 +8,7 @@ pub mod generate;
 pub mod grid;
 pub mod localisation;
 pub mod mapimg;
+pub mod mission;
 pub mod record;
 pub mod report;
 pub mod runner;

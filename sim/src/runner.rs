@@ -6,8 +6,9 @@
 //! 2. the **motor board** and **sensor board** twins read their UARTs and answer (telemetry,
 //!    keep-state, sensor frames built from the body's sensors);
 //! 3. **Carto** ([`carto::CartoRuntime`]) reads its three links, runs its state machines, writes;
-//! 4. the **operator** plays the mission script on **Cute**, which talks to Carto over the
-//!    in-memory "TCP" link (reconnecting by itself after a disconnect);
+//! 4. **Cute** ([`cute::CuteRuntime`]) reads, the **operator** ([`crate::mission::Operator`])
+//!    plays the mission script on it, and Cute polls and writes, over the in-memory "TCP" link
+//!    (reconnecting by itself after a disconnect);
 //! 5. the motor board's wheel setpoints drive the **physics** one step; the sonar measures when
 //!    its cycle is due.
 //!
@@ -15,18 +16,19 @@
 //! every link — see [`Lockstep::link_logs`] and the determinism test.
 
 use carto::{Carto, CartoConfig, CartoRuntime};
-use cute::{CellValue, Cute, CuteConfig, CuteError, Status};
+use cute::{CellValue, Cute, CuteConfig, CuteError, CuteRuntime, Wrap};
 use robot_model::time::{Duration, Instant};
 use transport::{
-    ByteFaults, Connector, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock,
-    TraceHandle, TraceTotals, Tracer, mem_listener,
+    ByteFaults, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock, TraceHandle,
+    TraceTotals, Tracer, mem_listener,
 };
 
 use crate::body::RobotBody;
 use crate::grid::{GridFrame, TruthGrid};
+use crate::mission::Operator;
 use crate::record::{EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
-use crate::scenario::{Fault, LinkFaults, LoadedScenario, Step};
+use crate::scenario::{Fault, LinkFaults, LoadedScenario};
 use crate::twin::{Twin, WriteBudget};
 
 /// Cute's end of the Cute ⇄ Carto link.
@@ -47,124 +49,39 @@ pub enum SetupError {
     Cute(#[from] CuteError),
 }
 
-/// The mission script, played one step at a time on Cute.
-#[derive(Debug)]
-struct Operator {
-    steps: Vec<Step>,
-    next: usize,
-    wait_until: Option<Instant>,
-    errors: Vec<String>,
-    finished_at: Option<Instant>,
+/// How the twin wires each Cute connection: a fault injector seeded per connection, under a
+/// tracer whose records become that connection's endpoint log.
+struct GuiLinks {
+    faults: FaultConfig,
+    fault_seed: u64,
+    clock: MockClock,
+    /// One trace per connection, in order.
+    traces: Vec<TraceHandle>,
+    /// Faults injected on connections already closed.
+    fault_counts: u64,
 }
 
-impl Operator {
-    fn new(steps: Vec<Step>) -> Self {
-        Operator { steps, next: 0, wait_until: None, errors: Vec::new(), finished_at: None }
+impl Wrap<MemLink> for GuiLinks {
+    type Link = CuteEnd;
+
+    fn wrap(&mut self, raw: MemLink, n: u64) -> CuteEnd {
+        let seed = self.fault_seed.wrapping_add(n);
+        let link = FaultInjector::new(raw, seed, self.clock.clone()).with_config(self.faults);
+        let link = Tracer::new(link, self.clock.clone());
+        self.traces.push(link.handle());
+        link
     }
 
-    /// Plays every step that can complete now.
-    fn poll(&mut self, now: Instant, cute: &mut Cute) {
-        while let Some(step) = self.steps.get(self.next).cloned() {
-            let done = match step {
-                Step::StartCartography => {
-                    if let Err(e) = cute.start_cartography() {
-                        self.errors.push(format!("StartCartography at {now}: {e}"));
-                    }
-                    true
-                }
-                Step::WaitUntilMapped => cute.status() != Status::Mapping,
-                Step::GoTo(row, col) => {
-                    if let Err(e) = cute.go_to(row, col) {
-                        self.errors.push(format!("GoTo({row}, {col}) at {now}: {e}"));
-                    }
-                    true
-                }
-                Step::WaitUntilIdle => matches!(cute.status(), Status::Idle | Status::Done),
-                Step::Stop => {
-                    cute.stop();
-                    true
-                }
-                Step::ResetMap => {
-                    cute.reset_map();
-                    true
-                }
-                Step::Wait(seconds) => {
-                    let until =
-                        *self.wait_until.get_or_insert(now + Duration::from_secs_f64(f64::from(seconds)));
-                    now >= until
-                }
-            };
-            if !done {
-                return;
-            }
-            self.wait_until = None;
-            self.next += 1;
+    fn retire(&mut self, mut link: CuteEnd) {
+        self.fault_counts += fault_total(link.inner());
+        if let Some(inner) = link.inner_mut().inner_mut() {
+            inner.close();
         }
-        self.finished_at.get_or_insert(now);
     }
 }
 
 /// Cute and its connection to Carto (Cute decides when to reconnect, with back-off).
-struct CuteSide {
-    cute: Cute,
-    connector: MemConnector,
-    link: Option<CuteEnd>,
-    faults: FaultConfig,
-    fault_seed: u64,
-    clock: MockClock,
-    traces: Vec<TraceHandle>,
-    connects: u64,
-    fault_counts: u64,
-}
-
-impl CuteSide {
-    fn poll(&mut self, now: Instant, operator: &mut Operator) {
-        if self.link.is_none() && self.cute.next_connect_at(now).is_some_and(|at| now >= at) {
-            match self.connector.connect() {
-                Ok(raw) => {
-                    let seed = self.fault_seed.wrapping_add(self.connects);
-                    let link = FaultInjector::new(raw, seed, self.clock.clone()).with_config(self.faults);
-                    let link = Tracer::new(link, self.clock.clone());
-                    self.traces.push(link.handle());
-                    self.link = Some(link);
-                    self.connects += 1;
-                    self.cute.on_connected(now);
-                }
-                Err(_) => self.cute.on_connect_failed(now),
-            }
-        }
-        let mut incoming = Vec::new();
-        let alive = self.link.as_mut().is_none_or(|l| l.read_available(&mut incoming).is_ok());
-        if !incoming.is_empty() {
-            self.cute.on_bytes(now, &incoming);
-        }
-        if !alive || self.cute.close_requested() {
-            self.drop_link(now);
-        }
-        operator.poll(now, &mut self.cute);
-        self.cute.poll(now);
-        let out = self.cute.take_outgoing();
-        if let Some(link) = self.link.as_mut()
-            && !out.is_empty()
-        {
-            // The in-memory TCP link takes everything (its queue is far larger than a frame
-            // batch); a failure means the peer is gone.
-            if link.write(&out).is_err() {
-                self.drop_link(now);
-            }
-        }
-    }
-
-    fn drop_link(&mut self, now: Instant) {
-        if let Some(mut link) = self.link.take() {
-            self.fault_counts += fault_total(link.inner());
-            if let Some(inner) = link.inner_mut().inner_mut() {
-                inner.close();
-            }
-            self.cute.on_disconnected(now);
-        }
-    }
-}
+type CuteSide = CuteRuntime<MemConnector, GuiLinks>;
 
 fn fault_total<L: Link>(f: &FaultInjector<L>) -> u64 {
     let c = f.counters();
@@ -261,17 +178,17 @@ impl Lockstep {
             motor_board_end,
             sensor_board_end,
             carto,
-            cute: CuteSide {
+            cute: CuteRuntime::with_wrap(
                 cute,
                 connector,
-                link: None,
-                faults: fault_config(&scenario.links.gui),
-                fault_seed: seed ^ 0x0067_7569,
-                clock: clock.clone(),
-                traces: Vec::new(),
-                connects: 0,
-                fault_counts: 0,
-            },
+                GuiLinks {
+                    faults: fault_config(&scenario.links.gui),
+                    fault_seed: seed ^ 0x0067_7569,
+                    clock: clock.clone(),
+                    traces: Vec::new(),
+                    fault_counts: 0,
+                },
+            ),
             operator,
             faults_fired: vec![false; faults.len()],
             faults,
@@ -300,7 +217,7 @@ impl Lockstep {
                 Fault::GuiDisconnect { at_s } => {
                     if !*fired && Instant::from_secs_f64(f64::from(*at_s)) <= now {
                         *fired = true;
-                        self.cute.drop_link(now);
+                        self.cute.disconnect(now);
                     }
                 }
             }
@@ -318,7 +235,8 @@ impl Lockstep {
         self.carto.step(now);
 
         // 4. Cute and the operator.
-        self.cute.poll(now, &mut self.operator);
+        let operator = &mut self.operator;
+        self.cute.step_with(now, |cute| operator.poll(now, cute));
         if self.operator.finished_at.is_some() && self.settled_at.is_none() {
             self.settled_at = Some(now + SETTLE);
         }
@@ -350,6 +268,7 @@ impl Lockstep {
         // Each connection Cute makes is its own endpoint log: `cute#1`, `cute#2`, …
         let cute_traces = self
             .cute
+            .wrapper()
             .traces
             .iter()
             .enumerate()
@@ -409,12 +328,12 @@ impl Lockstep {
 
     /// Cute, as the operator sees it.
     pub fn cute(&self) -> &Cute {
-        &self.cute.cute
+        self.cute.cute()
     }
 
     /// Cute, for user actions from a window.
     pub fn cute_mut(&mut self) -> &mut Cute {
-        &mut self.cute.cute
+        self.cute.cute_mut()
     }
 
     /// Carto's state.
@@ -449,7 +368,7 @@ impl Lockstep {
 
     /// What Cute's map says of each cell, row-major: `Some(true)` free, `Some(false)` obstacle.
     pub fn known_cells(&self) -> Vec<Option<bool>> {
-        let map = self.cute.cute.map();
+        let map = self.cute.cute().map();
         let mut out = Vec::with_capacity(self.truth.rows * self.truth.cols);
         for row in 0..self.truth.rows {
             for col in 0..self.truth.cols {
@@ -470,11 +389,11 @@ impl Lockstep {
         let map = MapScore::score(&self.truth, start, &self.known_cells());
         let pose = self.twin.body().pose();
         let sim_time_s = self.now.as_secs_f64();
-        let cute = &self.cute.cute;
+        let cute = self.cute.cute();
         let (cx, cy, _) = cute.robot();
         let links = self.link_stats();
-        let faults_injected = self.cute.fault_counts
-            + self.cute.link.as_ref().map_or(0, |l| fault_total(l.inner()))
+        let faults_injected = self.cute.wrapper().fault_counts
+            + self.cute.link().map_or(0, |l| fault_total(l.inner()))
             + self.carto.motor_link().map_or(0, |l| fault_total(l.inner()))
             + self.carto.sensor_link().map_or(0, |l| fault_total(l.inner()));
         let mut report = Report {
@@ -498,7 +417,7 @@ impl Lockstep {
             cute_cell: (cx, cy),
             links,
             faults_injected,
-            reconnects: self.cute.connects.saturating_sub(1),
+            reconnects: self.cute.connects().saturating_sub(1),
             // Hashing every byte of a long run costs; a report taken while the run goes on (the
             // window's status) has none.
             link_log_sha256: if self.is_finished() {
@@ -556,11 +475,11 @@ impl Lockstep {
             },
         };
         // Cute's tracer sits before its fault injector: its written bytes are what Cute sent.
-        let cute = self.cute.cute.counters();
+        let cute = self.cute.cute().counters();
         let gui = LinkStats {
             name: "gui".to_string(),
             outbound: DirectionStats {
-                bytes: self.cute.traces.iter().map(|h| h.totals().written).sum(),
+                bytes: self.cute.wrapper().traces.iter().map(|h| h.totals().written).sum(),
                 frames: carto.client_frames_in,
                 errors: carto.protocol_errors + carto.fatal_errors,
             },

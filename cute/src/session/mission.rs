@@ -1,0 +1,592 @@
+//! The session's missions: [`Mapping`] (cartography, one move at a time) and [`Moving`] (a
+//! trajectory, one batch at a time), each owning the move or batch it has in flight.
+//!
+//! Concept: the session asks its [`Mission`] what to send next ([`Mission::next`], only while the
+//! link is ready) and hands it Carto's answers (`on_position`, `on_obstacle`, `on_move_done`) and
+//! disconnects. Both work on the session's [`Belief`] (the map and the robot's cell and
+//! heading) and return what the session must send or report; they never encode, count or queue
+//! events themselves.
+//!
+//! - `Mapping`: a SET_ROBOT_POSITION / SET_OBSTACLE_POSITION before MOVE_DONE is the move's
+//!   result; MOVE_DONE feeds it to the [`Cartographer`]. A bare MOVE_DONE after a FORWARD means
+//!   Carto did not execute it: the move is re-sent, up to [`MAX_REJECTED`] times in a row. After a
+//!   disconnect a result already reported is applied, an unanswered move re-sent.
+//! - `Moving`: each SET_ROBOT_POSITION moves the robot one FORWARD along the batch; MOVE_DONE puts
+//!   it at the batch's last cell; an obstacle aborts. After a disconnect the rest is re-planned
+//!   from the last reported cell. With the original Carto ([`Compat::Explobot2024`]) every batch
+//!   goes out at once and the robot is assumed at the destination.
+//!
+//! Invariants: at most one move or batch is in flight; [`Mission::next`] returns
+//! [`Next::Wait`] while one is.
+//!
+//! ```
+//! use cute::session::{Cute, CuteConfig, Status};
+//! use robot_model::grid::Heading;
+//! use robot_model::time::Instant;
+//! let mut cute = Cute::new(CuteConfig { rows: 1, cols: 2, heading: Heading::East,
+//!     ..CuteConfig::default() }).unwrap();
+//! cute.on_connected(Instant::ZERO);
+//! cute.on_bytes(Instant::ZERO, &[0x00, 0x02, 0x08, 0x00]); // ROBOT_POSITION_RECEIVED
+//! cute.start_cartography().unwrap();
+//! cute.take_outgoing();                                     // FORWARD in flight
+//! cute.on_bytes(Instant::from_millis(1), &[0x00, 0x04, 0x05, 0x00, 0, 1]); // SET_ROBOT_POSITION
+//! cute.on_bytes(Instant::from_millis(2), &[0x00, 0x02, 0x03, 0x00]);       // MOVE_DONE
+//! assert_eq!(cute.robot().1, 1);
+//! assert_eq!(cute.status(), Status::Done); // both cells known
+//! ```
+
+use std::collections::VecDeque;
+
+use robot_model::grid::{Cell, Heading, Move};
+use robot_model::time::{Duration, Instant};
+use tracing::warn;
+
+use super::Compat;
+use crate::cartography::{CartoStats, Cartographer, MoveResult};
+use crate::map::Map;
+use crate::trajectory::Planner;
+
+/// Consecutive cartography moves answered by a bare MOVE_DONE before mapping gives up.
+pub const MAX_REJECTED: u32 = 3;
+
+/// A cell and a heading.
+type Pose = (Cell, Heading);
+
+/// What the session believes: the map and the robot's cell and heading on it.
+#[derive(Debug, Clone)]
+pub(crate) struct Belief {
+    pub(crate) map: Map,
+    pub(crate) robot: Cell,
+    pub(crate) heading: Heading,
+}
+
+impl Belief {
+    /// Moves the robot marker to `cell` if it is on the map.
+    pub(crate) fn set_robot(&mut self, cell: Cell) {
+        if self.map.set_robot(usize::from(cell.0), usize::from(cell.1)).is_ok() {
+            self.robot = cell;
+        }
+    }
+
+    /// Marks `(x, y)` as an obstacle, unless the robot stands there.
+    pub(crate) fn mark_obstacle(&mut self, x: u8, y: u8) {
+        if (x, y) != self.robot {
+            let _ = self.map.set_obstacle(usize::from(x), usize::from(y));
+        }
+    }
+
+    /// A fresh cartographer from the robot's pose.
+    fn cartographer(&self) -> Option<Cartographer> {
+        Cartographer::new(self.map.rows(), self.map.cols(), self.robot, self.heading).ok()
+    }
+}
+
+/// What the session should do next for its mission.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) enum Next {
+    /// Nothing to send: no mission, or an answer is awaited.
+    Wait,
+    /// Send this cartography move.
+    Cartography(Move),
+    /// Send this trajectory batch (one frame per command).
+    Batch(Vec<Move>),
+    /// Send every batch now; the robot is already moved to the end. The mission is over.
+    FireAndForget(Vec<Vec<Move>>),
+    /// Cartography is complete. The mission is over.
+    Mapped(CartoStats),
+    /// The robot is at the destination. The mission is over.
+    Arrived,
+    /// The rest of the trajectory could not be planned to this cell. The mission is over.
+    NoPath(Cell),
+}
+
+/// How a SET_OBSTACLE_POSITION fitted the mission.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Obstacle {
+    /// It is the result of the move in flight.
+    Recorded,
+    /// The trajectory met it: marked on the map; the mission is over.
+    Aborted,
+    /// Nothing asked for it.
+    Unsolicited,
+}
+
+/// How a MOVE_DONE fitted the mission.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Answer {
+    /// It ended the move or batch in flight.
+    Applied,
+    /// Carto refused this cartography move [`MAX_REJECTED`] times; the mission is over.
+    Rejected(Move),
+    /// Nothing was in flight.
+    Unsolicited,
+}
+
+/// The running mission, if any.
+#[derive(Debug, Clone)]
+pub(crate) enum Mission {
+    None,
+    Mapping(Mapping),
+    Moving(Moving),
+}
+
+impl Mission {
+    /// What to send or report now, the link being ready at `now`.
+    pub(crate) fn next(
+        &mut self,
+        belief: &mut Belief,
+        planner: &mut Planner,
+        now: Instant,
+        timeout: Duration,
+    ) -> Next {
+        match self {
+            Mission::None => Next::Wait,
+            Mission::Mapping(m) => m.next(&belief.map, now + timeout),
+            Mission::Moving(m) => m.next(belief, planner, now, timeout),
+        }
+    }
+
+    /// The deadline of the move or batch in flight.
+    pub(crate) fn deadline(&self) -> Option<Instant> {
+        match self {
+            Mission::Mapping(Mapping { flight: Some(f), .. }) => Some(f.deadline),
+            Mission::Moving(Moving { flight: Some(f), .. }) => Some(f.deadline),
+            _ => None,
+        }
+    }
+
+    /// SET_ROBOT_POSITION `(x, y)` (on the map). Returns false if nothing was in flight.
+    pub(crate) fn on_position(&mut self, belief: &mut Belief, x: u8, y: u8) -> bool {
+        match self {
+            Mission::Mapping(Mapping { flight: Some(f), .. }) => {
+                f.result = Some(MoveResult::Moved { x, y });
+                true
+            }
+            Mission::Moving(Moving { flight: Some(b), .. }) => {
+                if let Some(&(_, h)) = b.steps.get(b.seen) {
+                    belief.heading = h;
+                }
+                b.seen += 1;
+                belief.set_robot((x, y));
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// SET_OBSTACLE_POSITION `(x, y)`.
+    pub(crate) fn on_obstacle(&mut self, belief: &mut Belief, x: u8, y: u8) -> Obstacle {
+        match self {
+            Mission::Mapping(Mapping { flight: Some(f), .. }) => {
+                f.result = Some(MoveResult::Blocked { x, y });
+                Obstacle::Recorded
+            }
+            Mission::Moving(_) => {
+                if let Some(h) = Heading::between(belief.robot, (x, y)) {
+                    belief.heading = h;
+                }
+                belief.map.clear_trajectory();
+                belief.mark_obstacle(x, y);
+                Obstacle::Aborted
+            }
+            _ => Obstacle::Unsolicited,
+        }
+    }
+
+    /// MOVE_DONE.
+    pub(crate) fn on_move_done(&mut self, belief: &mut Belief) -> Answer {
+        match self {
+            Mission::Mapping(m) => m.on_move_done(belief),
+            Mission::Moving(m) => m.on_move_done(belief),
+            Mission::None => Answer::Unsolicited,
+        }
+    }
+
+    /// The link dropped: keep what happened, prepare to resume.
+    pub(crate) fn on_disconnected(&mut self, belief: &mut Belief) {
+        match self {
+            Mission::Mapping(m) => {
+                // A result already reported did happen; otherwise the move is re-sent later.
+                if let Some(f) = m.flight.take()
+                    && let Some(result) = f.result
+                {
+                    m.apply(belief, f.command, result);
+                }
+            }
+            Mission::Moving(m) => {
+                if m.flight.take().is_some() || !m.batches.is_empty() {
+                    m.batches.clear();
+                    m.replan = true;
+                }
+            }
+            Mission::None => {}
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct CartoFlight {
+    command: Move,
+    deadline: Instant,
+    result: Option<MoveResult>,
+}
+
+/// Cartography: the cartographer, the move in flight and its result so far.
+#[derive(Debug, Clone)]
+pub(crate) struct Mapping {
+    carto: Box<Cartographer>,
+    flight: Option<CartoFlight>,
+    /// Consecutive bare MOVE_DONEs after a FORWARD.
+    rejected: u32,
+}
+
+impl Mapping {
+    /// Cartography driven by `carto`.
+    pub(crate) fn new(carto: Cartographer) -> Mapping {
+        Mapping { carto: Box::new(carto), flight: None, rejected: 0 }
+    }
+
+    /// The cartographer.
+    pub(crate) fn cartographer(&self) -> &Cartographer {
+        &self.carto
+    }
+
+    /// Starts over from the robot's pose after a map reset; a move in flight is applied to the
+    /// pose when it is answered, then yet another fresh cartographer starts from there.
+    pub(crate) fn restart(&mut self, belief: &Belief) {
+        if let Some(fresh) = belief.cartographer() {
+            *self.carto = fresh;
+        }
+    }
+
+    fn next(&mut self, map: &Map, deadline: Instant) -> Next {
+        if self.flight.is_some() {
+            return Next::Wait;
+        }
+        match self.carto.next_command(map) {
+            Some(command) => {
+                self.flight = Some(CartoFlight { command, deadline, result: None });
+                Next::Cartography(command)
+            }
+            None => Next::Mapped(self.carto.stats()),
+        }
+    }
+
+    fn on_move_done(&mut self, belief: &mut Belief) -> Answer {
+        let Some(f) = self.flight.take() else {
+            return Answer::Unsolicited;
+        };
+        let result = f.result.unwrap_or(if f.command.is_turn() {
+            MoveResult::Turned
+        } else {
+            MoveResult::NotExecuted
+        });
+        if result == MoveResult::NotExecuted {
+            self.rejected += 1;
+            if self.rejected >= MAX_REJECTED {
+                warn!(command = %f.command, "Carto keeps refusing the move; mapping stopped");
+                self.carto.cancel_pending();
+                return Answer::Rejected(f.command);
+            }
+        } else {
+            self.rejected = 0;
+        }
+        self.apply(belief, f.command, result);
+        Answer::Applied
+    }
+
+    /// Feeds a move's result to the cartographer and mirrors the pose.
+    fn apply(&mut self, belief: &mut Belief, command: Move, result: MoveResult) {
+        if self.carto.pending() == Some(command) {
+            self.carto.on_result(&mut belief.map, result);
+            belief.robot = self.carto.pose();
+            belief.heading = self.carto.heading();
+            return;
+        }
+        // The cartographer was replaced (map reset) while the move was in flight.
+        match result {
+            MoveResult::Moved { x, y } => belief.set_robot((x, y)),
+            MoveResult::Turned => belief.heading = belief.heading.after(command),
+            MoveResult::Blocked { x, y } => belief.mark_obstacle(x, y),
+            MoveResult::NotExecuted => {}
+        }
+        self.carto.cancel_pending();
+        if let Some(fresh) = belief.cartographer() {
+            *self.carto = fresh;
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct BatchFlight {
+    /// `(cell, heading)` after each FORWARD of the batch, in order.
+    steps: Vec<Pose>,
+    /// The heading after the whole batch.
+    end_heading: Heading,
+    /// SET_ROBOT_POSITION frames received for this batch.
+    seen: usize,
+    deadline: Instant,
+}
+
+/// A trajectory: the destination, the batches still to send and the batch in flight.
+#[derive(Debug, Clone)]
+pub(crate) struct Moving {
+    dest: Cell,
+    compat: Compat,
+    batches: VecDeque<Vec<Move>>,
+    flight: Option<BatchFlight>,
+    /// Plan again from the robot's cell before the next batch (after a disconnect).
+    replan: bool,
+}
+
+impl Moving {
+    /// Drives `commands` to `dest`, in batches `compat` accepts.
+    pub(crate) fn new(dest: Cell, commands: &[Move], compat: Compat) -> Moving {
+        Moving { dest, compat, batches: batches(commands, compat), flight: None, replan: false }
+    }
+
+    fn next(&mut self, belief: &mut Belief, planner: &mut Planner, now: Instant, timeout: Duration) -> Next {
+        if self.flight.is_some() {
+            return Next::Wait;
+        }
+        if self.replan {
+            self.replan = false;
+            match planner.plan_on_map(&mut belief.map, belief.robot, belief.heading, self.dest) {
+                Ok(t) if t.commands.is_empty() => {}
+                Ok(t) => self.batches = batches(&t.commands, self.compat),
+                Err(e) => {
+                    warn!(error = %e, "cannot resume the trajectory");
+                    return Next::NoPath(self.dest);
+                }
+            }
+        }
+        if self.compat == Compat::Explobot2024 {
+            // Fire and forget: the original Carto never answers a trajectory.
+            let all: Vec<Vec<Move>> = self.batches.drain(..).collect();
+            let mut pose = (belief.robot, belief.heading);
+            for batch in &all {
+                pose = simulate(pose, batch, belief.map.rows(), belief.map.cols()).1;
+            }
+            belief.set_robot(pose.0);
+            belief.heading = pose.1;
+            return Next::FireAndForget(all);
+        }
+        let Some(batch) = self.batches.pop_front() else {
+            return Next::Arrived;
+        };
+        let (steps, end) =
+            simulate((belief.robot, belief.heading), &batch, belief.map.rows(), belief.map.cols());
+        let deadline = now + Duration::from_micros(timeout.total_micros().saturating_mul(batch.len() as u64));
+        self.flight = Some(BatchFlight { steps, end_heading: end.1, seen: 0, deadline });
+        Next::Batch(batch)
+    }
+
+    fn on_move_done(&mut self, belief: &mut Belief) -> Answer {
+        let Some(b) = self.flight.take() else {
+            return Answer::Unsolicited;
+        };
+        // MOVE_DONE ends the batch: the robot is at its last cell (also when Carto sent no
+        // positions, like the original).
+        if let Some(&(cell, _)) = b.steps.last() {
+            belief.set_robot(cell);
+        }
+        belief.heading = b.end_heading;
+        Answer::Applied
+    }
+}
+
+fn batches(commands: &[Move], compat: Compat) -> VecDeque<Vec<Move>> {
+    commands.chunks(compat.max_batch()).map(<[Move]>::to_vec).collect()
+}
+
+/// The `(cell, heading)` after each FORWARD of `commands`, and the final pose.
+fn simulate(start: Pose, commands: &[Move], rows: usize, cols: usize) -> (Vec<Pose>, Pose) {
+    let (mut cell, mut h) = start;
+    let mut steps = Vec::new();
+    for &c in commands {
+        if c == Move::Forward {
+            cell = h.step(cell, rows, cols).unwrap_or(cell);
+            steps.push((cell, h));
+        } else {
+            h = h.after(c);
+        }
+    }
+    (steps, (cell, h))
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::panic)]
+    use super::*;
+    use crate::map::CellValue;
+    use crate::session::MAX_BATCH;
+
+    const T: Duration = Duration::from_secs(5);
+
+    /// A `1 × cols` corridor, robot at (0, 0) facing east; `free` cells known free.
+    fn corridor(cols: usize, free: bool) -> Belief {
+        let mut map = Map::new(1, cols).unwrap();
+        if free {
+            for y in 0..cols {
+                map.set_free(0, y).unwrap();
+            }
+        }
+        map.set_robot(0, 0).unwrap();
+        Belief { map, robot: (0, 0), heading: Heading::East }
+    }
+
+    fn mapping(b: &Belief) -> Mission {
+        Mission::Mapping(Mapping::new(b.cartographer().unwrap()))
+    }
+
+    fn at(s: u64) -> Instant {
+        Instant::from_secs(s)
+    }
+
+    #[test]
+    fn mapping_sends_one_move_and_waits_for_its_answer() {
+        let (mut b, mut p) = (corridor(3, false), Planner::new());
+        let mut m = mapping(&b);
+        assert_eq!(m.next(&mut b, &mut p, at(1), T), Next::Cartography(Move::Forward));
+        assert_eq!(m.deadline(), Some(at(6)));
+        assert_eq!(m.next(&mut b, &mut p, at(2), T), Next::Wait, "one move in flight at a time");
+        assert!(m.on_position(&mut b, 0, 1));
+        assert_eq!(b.robot, (0, 0), "a position is only the move's result until MOVE_DONE");
+        assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        assert_eq!((b.robot, m.deadline()), ((0, 1), None));
+        assert_eq!(m.next(&mut b, &mut p, at(3), T), Next::Cartography(Move::Forward));
+        assert_eq!(m.on_obstacle(&mut b, 0, 2), Obstacle::Recorded);
+        assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        assert_eq!(b.map.get(0, 2), Some(CellValue::Obstacle));
+        assert!(matches!(m.next(&mut b, &mut p, at(4), T), Next::Mapped(s) if s.commands == 2));
+    }
+
+    #[test]
+    fn a_forward_answered_by_a_bare_move_done_is_resent_then_given_up() {
+        let (mut b, mut p) = (corridor(2, false), Planner::new());
+        let mut m = mapping(&b);
+        for _ in 1..MAX_REJECTED {
+            assert_eq!(m.next(&mut b, &mut p, at(0), T), Next::Cartography(Move::Forward));
+            assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        }
+        assert_eq!(m.next(&mut b, &mut p, at(0), T), Next::Cartography(Move::Forward));
+        assert_eq!(m.on_move_done(&mut b), Answer::Rejected(Move::Forward));
+        assert_eq!(b.robot, (0, 0));
+    }
+
+    #[test]
+    fn a_turn_answered_by_a_bare_move_done_was_made() {
+        let (mut b, mut p) = (corridor(2, false), Planner::new());
+        b.heading = Heading::North;
+        let mut m = mapping(&b);
+        let Next::Cartography(turn) = m.next(&mut b, &mut p, at(0), T) else { panic!("no move") };
+        assert!(turn.is_turn());
+        assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        assert_eq!(b.heading, Heading::North.after(turn));
+    }
+
+    #[test]
+    fn a_disconnect_keeps_a_reported_result_and_resends_an_unanswered_move() {
+        let (mut b, mut p) = (corridor(3, false), Planner::new());
+        let mut m = mapping(&b);
+        m.next(&mut b, &mut p, at(0), T);
+        m.on_disconnected(&mut b);
+        assert_eq!((b.robot, m.deadline()), ((0, 0), None));
+        assert_eq!(m.next(&mut b, &mut p, at(1), T), Next::Cartography(Move::Forward), "re-sent");
+        assert!(m.on_position(&mut b, 0, 1));
+        m.on_disconnected(&mut b);
+        assert_eq!(b.robot, (0, 1), "the reported move did happen");
+        assert_eq!(m.on_move_done(&mut b), Answer::Unsolicited, "nothing in flight any more");
+    }
+
+    #[test]
+    fn a_map_reset_during_a_move_applies_it_then_starts_afresh() {
+        let (mut b, mut p) = (corridor(3, false), Planner::new());
+        let mut m = mapping(&b);
+        m.next(&mut b, &mut p, at(0), T);
+        b.map.reset();
+        b.map.set_robot(0, 0).unwrap();
+        if let Mission::Mapping(mm) = &mut m {
+            mm.restart(&b);
+        }
+        assert!(m.on_position(&mut b, 0, 1));
+        assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        assert_eq!(b.robot, (0, 1));
+        let Mission::Mapping(mm) = &m else { panic!("still mapping") };
+        assert_eq!((mm.cartographer().pose(), mm.cartographer().pending()), ((0, 1), None));
+    }
+
+    #[test]
+    fn a_trajectory_follows_positions_and_ends_at_the_batch_end() {
+        let (mut b, mut p) = (corridor(4, true), Planner::new());
+        let mut m = Mission::Moving(Moving::new((0, 3), &[Move::Forward; 3], Compat::Default));
+        assert_eq!(m.next(&mut b, &mut p, at(1), T), Next::Batch(vec![Move::Forward; 3]));
+        assert_eq!(m.deadline(), Some(at(16)), "5 s per command");
+        assert_eq!(m.next(&mut b, &mut p, at(1), T), Next::Wait);
+        assert!(m.on_position(&mut b, 0, 1));
+        assert_eq!(b.robot, (0, 1), "each position moves the robot at once");
+        assert_eq!(m.on_move_done(&mut b), Answer::Applied);
+        assert_eq!(b.robot, (0, 3), "MOVE_DONE: at the batch's last cell");
+        assert_eq!(m.next(&mut b, &mut p, at(2), T), Next::Arrived);
+    }
+
+    #[test]
+    fn batches_follow_the_compat_limit() {
+        let (mut b, mut p) = (corridor(2, true), Planner::new());
+        let mut m = Mission::Moving(Moving::new((0, 1), &[Move::Right; 300], Compat::Default));
+        assert!(matches!(m.next(&mut b, &mut p, at(0), T), Next::Batch(v) if v.len() == MAX_BATCH));
+        m.on_move_done(&mut b);
+        assert!(matches!(m.next(&mut b, &mut p, at(0), T), Next::Batch(v) if v.len() == 45));
+
+        let mut m = Mission::Moving(Moving::new((0, 1), &[Move::Right; 120], Compat::Explobot2024));
+        let Next::FireAndForget(all) = m.next(&mut b, &mut p, at(0), T) else { panic!("not fired") };
+        assert_eq!(all.iter().map(Vec::len).collect::<Vec<_>>(), [50, 50, 20]);
+        assert_eq!(m.deadline(), None, "nothing is awaited from the original Carto");
+    }
+
+    #[test]
+    fn a_fire_and_forget_trajectory_puts_the_robot_at_the_end() {
+        let (mut b, mut p) = (corridor(3, true), Planner::new());
+        let commands = [Move::Forward, Move::Forward, Move::Right];
+        let mut m = Mission::Moving(Moving::new((0, 2), &commands, Compat::Explobot2024));
+        assert_eq!(m.next(&mut b, &mut p, at(0), T), Next::FireAndForget(vec![commands.to_vec()]));
+        assert_eq!((b.robot, b.heading), ((0, 2), Heading::South));
+    }
+
+    #[test]
+    fn an_obstacle_aborts_a_trajectory_and_is_marked() {
+        let (mut b, mut p) = (corridor(4, true), Planner::new());
+        b.heading = Heading::North;
+        let mut m = Mission::Moving(Moving::new((0, 3), &[Move::Right, Move::Forward], Compat::Default));
+        m.next(&mut b, &mut p, at(0), T);
+        assert_eq!(m.on_obstacle(&mut b, 0, 1), Obstacle::Aborted);
+        assert_eq!(b.map.get(0, 1), Some(CellValue::Obstacle));
+        assert_eq!(b.heading, Heading::East, "facing the obstacle");
+    }
+
+    #[test]
+    fn an_interrupted_trajectory_is_replanned_from_the_last_cell() {
+        let (mut b, mut p) = (corridor(4, true), Planner::new());
+        let mut m = Mission::Moving(Moving::new((0, 3), &[Move::Forward; 3], Compat::Default));
+        m.next(&mut b, &mut p, at(0), T);
+        m.on_position(&mut b, 0, 1);
+        m.on_disconnected(&mut b);
+        assert_eq!(m.deadline(), None);
+        assert_eq!(m.next(&mut b, &mut p, at(1), T), Next::Batch(vec![Move::Forward; 2]));
+
+        m.on_disconnected(&mut b);
+        b.map.set_obstacle(0, 2).unwrap();
+        assert_eq!(m.next(&mut b, &mut p, at(2), T), Next::NoPath((0, 3)));
+    }
+
+    #[test]
+    fn answers_without_a_mission_are_unsolicited() {
+        let (mut b, mut p) = (corridor(2, true), Planner::new());
+        let mut m = Mission::None;
+        assert_eq!(m.next(&mut b, &mut p, at(0), T), Next::Wait);
+        assert!(!m.on_position(&mut b, 0, 1));
+        assert_eq!(m.on_obstacle(&mut b, 0, 1), Obstacle::Unsolicited);
+        assert_eq!(m.on_move_done(&mut b), Answer::Unsolicited);
+        assert_eq!(b.robot, (0, 0), "the session, not the mission, handles unsolicited answers");
+    }
+}
