@@ -45,8 +45,9 @@
 //!   free neighbouring cell without touching anything. The start is drawn among such cells of
 //!   the largest connected free area (where a user puts the robot down, not inside a closet).
 //!   When a draw has none, the next sub-seed is drawn.
-//! - The mission is `[StartCartography, WaitUntilMapped]`; expectations are coverage ≥ 0.98,
-//!   accuracy ≥ 0.95, no collision, and 40 s per m² of floor (about 67 minutes for 10 × 10 m,
+//! - The mission is `[StartCartography, WaitUntilMapped]`; expectations are the pass criteria of
+//!   issue 10 — coverage ≥ 0.98, accuracy ≥ 0.95, no collision, position error ≤ 5 cm, heading
+//!   error ≤ 3°, Cute's final cell the true one — and 40 s per m² of floor (about 67 minutes for 10 × 10 m,
 //!   at least 5 minutes) as both the finish limit and the run's time limit: Carto needs 2–4 s
 //!   per 0.30 m cell today, so the limit catches runs that hang without making speed a hidden
 //!   pass criterion.
@@ -284,11 +285,18 @@ impl GeneratedRoom {
         let e = &s.expect;
         let _ = writeln!(
             out,
-            "    expect: (coverage_min: {}, map_accuracy_min: {}, collisions_max: {:?}, finish_within_s: {}),",
+            "    expect: (coverage_min: {}, map_accuracy_min: {}, collisions_max: {:?}, finish_within_s: {},",
             fmt_opt(e.coverage_min),
             fmt_opt(e.map_accuracy_min),
             e.collisions_max,
             fmt_opt(e.finish_within_s.map(|v| format!("{v:.1}")))
+        );
+        let _ = writeln!(
+            out,
+            "             position_error_max_m: {}, heading_error_max_deg: {}, believed_cell_true: {:?}),",
+            fmt_opt(e.position_error_max_m),
+            fmt_opt(e.heading_error_max_deg.map(|v| format!("{v:.1}"))),
+            e.believed_cell_true
         );
         let _ = writeln!(out, ")");
         out
@@ -1760,6 +1768,9 @@ fn finish(
             collisions_max: Some(0),
             finish_within_s: Some(finish_s),
             reached: None,
+            position_error_max_m: Some(0.05),
+            heading_error_max_deg: Some(3.0),
+            believed_cell_true: Some(true),
         },
     };
     scenario.start = choose_start(&scenario, profile, rng)?;
@@ -1944,6 +1955,9 @@ mod tests {
             assert_eq!(sc.expect.coverage_min, Some(0.98));
             assert_eq!(sc.expect.map_accuracy_min, Some(0.95));
             assert_eq!(sc.expect.collisions_max, Some(0));
+            assert_eq!(sc.expect.position_error_max_m, Some(0.05));
+            assert_eq!(sc.expect.heading_error_max_deg, Some(3.0));
+            assert_eq!(sc.expect.believed_cell_true, Some(true));
             let area = f64::from(polygon_area(&sc.room).abs());
             let limit = sc.expect.finish_within_s.unwrap();
             assert!(

@@ -13,6 +13,7 @@ use std::fmt::Write as _;
 use serde::Serialize;
 
 use crate::grid::TruthGrid;
+use crate::localisation::Localisation;
 use crate::scenario::Expectations;
 
 /// Traffic on one direction of one link.
@@ -139,6 +140,8 @@ pub struct Report {
     pub final_cell: Option<(usize, usize)>,
     /// What Cute believes is the robot's cell at the end.
     pub cute_cell: (u8, u8),
+    /// How far Cute's belief strayed from the truth at the end of each move.
+    pub localisation: Localisation,
     /// Traffic per link.
     pub links: Vec<LinkStats>,
     /// Faults injected by the fault injectors (bit flips, drops).
@@ -216,6 +219,34 @@ impl Report {
                 pass: self.final_cell == Some((row as usize, col as usize)),
             });
         }
+        let loc = &self.localisation;
+        if let Some(max) = expect.position_error_max_m {
+            checks.push(Check {
+                name: "position_error_max_m".into(),
+                expected: format!("<= {max:.3} m"),
+                actual: format!("{:.3} m at {:.1} s", loc.position_error_max_m, loc.position_error_at_s),
+                pass: loc.position_error_max_m <= max,
+            });
+        }
+        if let Some(max) = expect.heading_error_max_deg {
+            checks.push(Check {
+                name: "heading_error_max_deg".into(),
+                expected: format!("<= {max:.1} deg"),
+                actual: format!("{:.1} deg at {:.1} s", loc.heading_error_max_deg, loc.heading_error_at_s),
+                pass: loc.heading_error_max_deg <= max,
+            });
+        }
+        if let Some(want) = expect.believed_cell_true {
+            let truth = self.final_cell.map(|(r, c)| (r as u8, c as u8));
+            let same =
+                truth == Some(self.cute_cell) && self.final_cell.is_some_and(|(r, c)| r < 256 && c < 256);
+            checks.push(Check {
+                name: "believed_cell_true".into(),
+                expected: format!("{want}"),
+                actual: format!("{same} (Cute {:?}, true {:?})", self.cute_cell, self.final_cell),
+                pass: same == want,
+            });
+        }
         self.passed = checks.iter().all(|c| c.pass) && self.mission_errors.is_empty();
         self.checks = checks;
     }
@@ -253,6 +284,15 @@ impl Report {
             s,
             "robot           x {:.3} m, y {:.3} m, heading {:.1} deg, {cell}; Cute believes ({}, {})",
             self.final_pose.0, self.final_pose.1, self.final_pose.2, self.cute_cell.0, self.cute_cell.1
+        );
+        let _ = writeln!(
+            s,
+            "localisation    at the end of {} moves: position error max {:.3} m (at {:.1} s), heading error max {:.1} deg (at {:.1} s)",
+            self.localisation.samples,
+            self.localisation.position_error_max_m,
+            self.localisation.position_error_at_s,
+            self.localisation.heading_error_max_deg,
+            self.localisation.heading_error_at_s
         );
         let _ = writeln!(s, "collisions      {}", self.collisions);
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");
@@ -300,6 +340,11 @@ impl Report {
             r.map.reachable_known_free, r.map.reachable, r.map.correct, r.map.classified
         );
         let _ = writeln!(s, "final cell {:?}, Cute believes {:?}", r.final_cell, r.cute_cell);
+        let _ = writeln!(
+            s,
+            "localisation {} samples, position error max {:.3} m, heading error max {:.1} deg",
+            r.localisation.samples, r.localisation.position_error_max_m, r.localisation.heading_error_max_deg
+        );
         let _ = writeln!(
             s,
             "final pose x {:.2} m, y {:.2} m, heading {:.0} deg",

@@ -25,6 +25,7 @@ use transport::{
 
 use crate::body::RobotBody;
 use crate::grid::{GridFrame, TruthGrid};
+use crate::localisation::Localisation;
 use crate::mission::Operator;
 use crate::record::{EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
@@ -120,6 +121,7 @@ pub struct Lockstep {
     logs: Vec<EndpointLog>,
     /// The link-log hash, computed once the run is over (the logs no longer change then).
     final_hash: std::sync::OnceLock<String>,
+    localisation: Localisation,
     settled_at: Option<Instant>,
 }
 
@@ -197,6 +199,7 @@ impl Lockstep {
             traces,
             logs: Vec::new(),
             final_hash: std::sync::OnceLock::new(),
+            localisation: Localisation::default(),
             settled_at: None,
             loaded,
         })
@@ -236,13 +239,24 @@ impl Lockstep {
 
         // 4. Cute and the operator.
         let operator = &mut self.operator;
+        let moves_done = self.cute.cute().counters().moves_done;
         self.cute.step_with(now, |cute| operator.poll(now, cute));
+        let move_ended = self.cute.cute().counters().moves_done != moves_done;
         if self.operator.finished_at.is_some() && self.settled_at.is_none() {
             self.settled_at = Some(now + SETTLE);
         }
 
         // 5. Physics.
         self.twin.physics_step(now);
+        if move_ended || self.is_finished() {
+            let (x, y, heading) = self.cute.cute().robot();
+            self.localisation.sample(
+                now.as_secs_f64(),
+                &self.truth.frame,
+                (x, y, heading),
+                self.twin.body().pose(),
+            );
+        }
         if self.steps.is_multiple_of(TRACE_EVERY) || self.is_finished() {
             self.collect_traces();
         }
@@ -415,6 +429,7 @@ impl Lockstep {
             final_pose: (f64::from(pose.x), f64::from(pose.y), f64::from(pose.theta.to_degrees())),
             final_cell: self.truth.frame.cell_at(pose.x, pose.y),
             cute_cell: (cx, cy),
+            localisation: self.localisation.clone(),
             links,
             faults_injected,
             reconnects: self.cute.connects().saturating_sub(1),

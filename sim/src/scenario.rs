@@ -179,6 +179,17 @@ pub struct Expectations {
     pub finish_within_s: Option<f64>,
     /// The robot's final cell (row, column).
     pub reached: Option<(u8, u8)>,
+    /// Largest distance, metres, between the true robot centre and the centre of the cell Cute
+    /// believes it is in, at the end of each move ([`crate::localisation`]).
+    #[serde(default)]
+    pub position_error_max_m: Option<f64>,
+    /// Largest angle, degrees, between the true heading and Cute's believed heading, at the end
+    /// of each move.
+    #[serde(default)]
+    pub heading_error_max_deg: Option<f64>,
+    /// `Some(true)`: at the end, the cell Cute believes the robot is in is the true one.
+    #[serde(default)]
+    pub believed_cell_true: Option<bool>,
 }
 
 /// A complete scenario file.

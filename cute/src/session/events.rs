@@ -116,6 +116,8 @@ pub enum CuteEvent {
 pub struct Counters {
     /// Move commands sent (cartography moves plus trajectory frames).
     pub moves_sent: u64,
+    /// `MOVE_DONE` frames received (the end of each move, solicited or not).
+    pub moves_done: u64,
     /// Frames sent.
     pub frames_out: u64,
     /// Frames received (decoded, unknown ids included).

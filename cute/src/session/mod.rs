@@ -457,14 +457,17 @@ impl Cute {
                     }
                 }
             }
-            GuiMessage::MoveDone => match self.mission.on_move_done(&mut self.belief) {
-                Answer::Applied => {}
-                Answer::Rejected(command) => {
-                    self.events.push(CuteEvent::MoveRejected { command });
-                    self.end_mission(Status::Idle);
+            GuiMessage::MoveDone => {
+                self.counters.moves_done += 1;
+                match self.mission.on_move_done(&mut self.belief) {
+                    Answer::Applied => {}
+                    Answer::Rejected(command) => {
+                        self.events.push(CuteEvent::MoveRejected { command });
+                        self.end_mission(Status::Idle);
+                    }
+                    Answer::Unsolicited => self.counters.unsolicited += 1,
                 }
-                Answer::Unsolicited => self.counters.unsolicited += 1,
-            },
+            }
             GuiMessage::Unknown { msg, .. } => {
                 self.counters.unknown_frames += 1;
                 debug!(msg, "unknown message id ignored");
