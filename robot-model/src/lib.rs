@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod boards;
+pub mod files;
 pub mod grid;
 pub mod kinematics;
 pub mod motor;

@@ -392,10 +392,8 @@ impl RobotProfile {
     /// Reads, parses and validates a profile file.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, ProfileError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError::Io {
-            path: path.display().to_string(),
-            kind: e.kind(),
-            message: e.to_string(),
+        let text = crate::files::read_text_bounded(path, crate::files::TEXT_FILE_LIMIT).map_err(|e| {
+            ProfileError::Io { path: path.display().to_string(), kind: e.kind(), message: e.to_string() }
         })?;
         Self::from_ron_str(&text, path)
     }

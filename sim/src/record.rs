@@ -12,6 +12,9 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+/// The largest recording `load` reads (2 GiB − 1).
+pub const MAX_RECORDING_BYTES: u64 = (1 << 31) - 1;
+
 /// Recording format version; bumped when the layout changes.
 pub const FORMAT_VERSION: u32 = 1;
 
@@ -92,8 +95,8 @@ impl Recording {
     /// file is an error, never an abort.
     pub fn load(path: &Path) -> Result<Recording, RecordingError> {
         let label = path.display().to_string();
-        let bytes =
-            std::fs::read(path).map_err(|source| RecordingError::Io { path: label.clone(), source })?;
+        let bytes = robot_model::files::read_bounded(path, MAX_RECORDING_BYTES)
+            .map_err(|source| RecordingError::Io { path: label.clone(), source })?;
         let decode_error = |e: bincode::error::DecodeError| RecordingError::Decode {
             path: label.clone(),
             message: e.to_string(),
@@ -104,12 +107,16 @@ impl Recording {
             return Err(RecordingError::Version { path: label, found: version });
         }
         // No length prefix inside the file can claim more than the file holds.
-        let config = bincode::config::standard().with_limit::<{ 1 << 31 }>();
-        if bytes.len() >= 1 << 31 {
-            return Err(RecordingError::Decode { path: label, message: "file larger than 2 GiB".into() });
-        }
-        let (rec, _): (Recording, usize) =
+        let config = bincode::config::standard().with_limit::<{ MAX_RECORDING_BYTES as usize }>();
+        let (rec, used): (Recording, usize) =
             bincode::serde::decode_from_slice(&bytes, config).map_err(decode_error)?;
+        // A recording ends where its content ends: bytes after it mean a damaged or spliced file.
+        if used != bytes.len() {
+            return Err(RecordingError::Decode {
+                path: label,
+                message: format!("{} bytes after the end of the recording", bytes.len() - used),
+            });
+        }
         Ok(rec)
     }
 
@@ -299,6 +306,17 @@ mod tests {
         let path = dir.join("a.rec");
         rec.save(&path).unwrap();
         assert_eq!(Recording::load(&path).unwrap(), rec);
+        // issue 15: garbage appended to a good recording is an error, not "identical".
+        let mut spliced = std::fs::read(&path).unwrap();
+        spliced.extend_from_slice(b"garbage");
+        std::fs::write(&path, &spliced).unwrap();
+        match Recording::load(&path) {
+            Err(RecordingError::Decode { message, .. }) => {
+                assert!(message.contains("7 bytes after"), "{message}")
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(Recording::load(Path::new("/dev/zero")), Err(RecordingError::Io { .. })));
         std::fs::write(&path, b"\x01\x02garbage").unwrap();
         assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
         // Version 1, then a string claiming an enormous length: an error, not an allocation abort.
