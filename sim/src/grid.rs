@@ -4,19 +4,34 @@
 //! as a margin on each side. Row 0 is the top row (largest world `y`), column 0 the leftmost. A
 //! cell is **free** in the ground truth when its square lies inside the room and touches no
 //! obstacle; **reachable** cells are the free cells 4-connected to the start cell.
+//!
+//! This module knows polygons and parry shapes, not scenarios: [`crate::scenario`] turns its
+//! obstacles into shapes and builds the grid once per scenario
+//! ([`crate::scenario::LoadedScenario::truth`]).
+//!
+//! ```
+//! use rapier2d::parry::math::{Pose, Vector};
+//! use rapier2d::parry::shape::{Ball, Shape};
+//! use sim::grid::{TruthGrid, room_frame};
+//! let room = [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)];
+//! let leg: (Pose, Box<dyn Shape>) = (Pose::from_translation(Vector::new(0.2, 0.8)), Box::new(Ball::new(0.02)));
+//! let truth = TruthGrid::build(room_frame(&room, 0.3), &room, &[leg]);
+//! assert_eq!((truth.rows, truth.cols), (3, 4));
+//! assert!(!truth.is_free(0, 0) && truth.is_free(2, 3));
+//! ```
 
 use std::collections::VecDeque;
 
 use rapier2d::parry::bounding_volume::Aabb;
 use rapier2d::parry::math::{Pose, Vector};
 use rapier2d::parry::query;
-use rapier2d::parry::shape::{Ball, ConvexPolygon, Cuboid, Segment, Shape};
+use rapier2d::parry::shape::{Cuboid, Segment, Shape};
 pub use rapier2d::parry::utils::point_in_poly2d;
-use robot_model::profile::RobotProfile;
-
-use crate::scenario::{Obstacle, Scenario};
 
 pub use robot_model::grid::{GridFrame, MAX_CELLS};
+
+/// A fixed shape and where it stands in the world.
+pub type PlacedShape = (Pose, Box<dyn Shape>);
 
 /// The planning grid over `room`'s bounding box with cells of `cell` metres.
 pub fn room_frame(room: &[(f32, f32)], cell: f32) -> GridFrame {
@@ -37,13 +52,10 @@ pub struct TruthGrid {
 }
 
 impl TruthGrid {
-    /// Rasterises the scenario's room and obstacles.
-    pub fn build(scenario: &Scenario, profile: &RobotProfile) -> TruthGrid {
-        let frame = room_frame(&scenario.room, scenario.cell_size(profile));
-        let room = room_points(&scenario.room);
-        let shapes: Vec<(Pose, Box<dyn Shape>)> =
-            scenario.obstacles.iter().filter_map(obstacle_shape).collect();
-        let walls: Vec<Segment> = room_edges(&scenario.room).collect();
+    /// Rasterises `room` (a polygon) and `obstacles` onto `frame`.
+    pub fn build(frame: GridFrame, room: &[(f32, f32)], obstacles: &[PlacedShape]) -> TruthGrid {
+        let walls: Vec<Segment> = room_edges(room).collect();
+        let room = room_points(room);
         // Obstacles are tested against the closed cell square: a thin wall lying on the edge
         // between two cells blocks both, as the robot cannot cross it. The room's own walls are
         // tested against a square shrunk by 1 mm, so a room that is a whole number of cells wide
@@ -61,7 +73,8 @@ impl TruthGrid {
                     .iter()
                     .all(|&(dx, dy)| point_in_poly2d(Vector::new(cx + dx, cy + dy), &room));
                 let crosses_wall = walls.iter().any(|w| intersects(&at, &square, &identity, w));
-                let hits_obstacle = shapes.iter().any(|(pose, s)| intersects(&at, &closed, pose, s.as_ref()));
+                let hits_obstacle =
+                    obstacles.iter().any(|(pose, s)| intersects(&at, &closed, pose, s.as_ref()));
                 free.push(inside && !crosses_wall && !hits_obstacle);
             }
         }
@@ -104,12 +117,6 @@ pub fn room_aabb(room: &[(f32, f32)]) -> Aabb {
     Aabb::from_points(room.iter().map(|&(x, y)| Vector::new(x, y)))
 }
 
-/// A polygon's bounding box as (min x, min y, max x, max y), metres.
-pub fn bounds(room: &[(f32, f32)]) -> (f32, f32, f32, f32) {
-    let aabb = room_aabb(room);
-    (aabb.mins.x, aabb.mins.y, aabb.maxs.x, aabb.maxs.y)
-}
-
 /// Width and height of a polygon's bounding box, metres.
 pub fn room_extent(room: &[(f32, f32)]) -> (f32, f32) {
     let aabb = room_aabb(room);
@@ -130,45 +137,27 @@ pub fn room_edges(room: &[(f32, f32)]) -> impl Iterator<Item = Segment> + '_ {
     })
 }
 
-/// The collision shape and placement of an obstacle (`None` for a degenerate polygon).
-pub fn obstacle_shape(o: &Obstacle) -> Option<(Pose, Box<dyn Shape>)> {
-    match o {
-        Obstacle::Box { center, size, angle_deg } => Some((
-            Pose::new(Vector::new(center.0, center.1), angle_deg.to_radians()),
-            Box::new(Cuboid::new(Vector::new(size.0 * 0.5, size.1 * 0.5))),
-        )),
-        Obstacle::Circle { center, radius } => {
-            Some((Pose::from_translation(Vector::new(center.0, center.1)), Box::new(Ball::new(*radius))))
-        }
-        Obstacle::Segment { from, to } => Some((
-            Pose::IDENTITY,
-            Box::new(Segment::new(Vector::new(from.0, from.1), Vector::new(to.0, to.1))),
-        )),
-        Obstacle::Polygon { points } => {
-            let pts: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
-            ConvexPolygon::from_convex_hull(&pts).map(|p| (Pose::IDENTITY, Box::new(p) as Box<dyn Shape>))
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::scenario::Scenario;
+    use rapier2d::parry::shape::Ball;
 
-    fn scenario(obstacles: &str) -> Scenario {
-        let text = format!(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)], \
-             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
-        );
-        Scenario::from_ron_str(&text, "t.ron").unwrap()
+    use super::*;
+
+    const ROOM: [(f32, f32); 4] = [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)];
+
+    /// The 1.3 x 0.95 m test room in 0.3 m cells, with `obstacles`.
+    fn truth(obstacles: Vec<PlacedShape>) -> TruthGrid {
+        TruthGrid::build(room_frame(&ROOM, 0.3), &ROOM, &obstacles)
+    }
+
+    fn wall(from: (f32, f32), to: (f32, f32)) -> PlacedShape {
+        (Pose::IDENTITY, Box::new(Segment::new(Vector::new(from.0, from.1), Vector::new(to.0, to.1))))
     }
 
     #[test]
     fn grid_is_centred_in_the_room_with_whole_cells() {
         // The frame itself is tested in robot_model::grid; here, that the room's truth uses it.
-        let s = scenario("");
-        let g = TruthGrid::build(&s, &RobotProfile::default());
+        let g = truth(Vec::new());
         assert_eq!((g.rows, g.cols), (3, 4));
         assert!((g.frame.left - 0.05).abs() < 1e-5);
         assert!((g.frame.top - 0.925).abs() < 1e-5);
@@ -181,10 +170,10 @@ mod tests {
     #[test]
     fn obstacles_block_the_cells_they_touch() {
         // A box over the centre of cell (1, 1) and a leg straddling columns 1 and 2 of row 0 (x = 0.65).
-        let s = scenario(
-            "Box(center: (0.5, 0.475), size: (0.1, 0.1)), Circle(center: (0.65, 0.8), radius: 0.02)",
-        );
-        let g = TruthGrid::build(&s, &RobotProfile::default());
+        let g = truth(vec![
+            (Pose::from_translation(Vector::new(0.5, 0.475)), Box::new(Cuboid::new(Vector::new(0.05, 0.05)))),
+            (Pose::from_translation(Vector::new(0.65, 0.8)), Box::new(Ball::new(0.02))),
+        ]);
         assert!(!g.is_free(1, 1));
         assert!(!g.is_free(0, 1) && !g.is_free(0, 2));
         assert!(g.is_free(2, 3));
@@ -195,8 +184,7 @@ mod tests {
 
     #[test]
     fn a_thin_wall_on_a_cell_edge_blocks_both_cells() {
-        let s = scenario("Segment(from: (0.65, 0.0), to: (0.65, 0.95))");
-        let g = TruthGrid::build(&s, &RobotProfile::default());
+        let g = truth(vec![wall((0.65, 0.0), (0.65, 0.95))]);
         assert!((0..3).all(|r| !g.is_free(r, 1) && !g.is_free(r, 2)));
         assert!(!g.reachable_from((0, 0))[3]);
     }
@@ -205,10 +193,7 @@ mod tests {
     fn an_enclosed_pocket_is_free_but_unreachable() {
         // Walls around cell (2, 3), the bottom-right corner cell (x 0.95..1.25, y 0.025..0.325),
         // standing in its neighbours (2, 2) and (1, 3).
-        let s = scenario(
-            "Segment(from: (0.94, 0.0), to: (0.94, 0.335)), Segment(from: (0.94, 0.335), to: (1.3, 0.335))",
-        );
-        let g = TruthGrid::build(&s, &RobotProfile::default());
+        let g = truth(vec![wall((0.94, 0.0), (0.94, 0.335)), wall((0.94, 0.335), (1.3, 0.335))]);
         assert!(g.is_free(2, 3));
         assert!(!g.is_free(2, 2) && !g.is_free(1, 3));
         assert!(!g.reachable_from((0, 0))[2 * g.cols + 3]);

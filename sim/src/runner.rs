@@ -213,8 +213,8 @@ impl Lockstep {
         let scenario = &loaded.scenario;
         let profile = &loaded.profile;
         let seed = seed.unwrap_or(scenario.seed);
-        let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
-        let truth = TruthGrid::build(scenario, profile);
+        let dt = loaded.dt();
+        let truth = loaded.truth().clone();
         let start = scenario.start;
         let twin = Twin::new(&loaded, seed, dt);
         let clock = MockClock::new();
