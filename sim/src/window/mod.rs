@@ -44,7 +44,8 @@ use bevy::time::{Real, Time};
 use cute::Cute;
 use cute::gui::bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
 use cute::gui::{
-    AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, CuteView, continuous_updates, setup_camera, window_plugins,
+    AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, CuteView, continuous_updates, setup_camera,
+    window_plugins,
 };
 use robot_model::time::Instant;
 
@@ -92,7 +93,7 @@ pub fn add_window_plugins(app: &mut App, run: &Lockstep) {
 pub fn request_screenshot(app: &mut App, path: PathBuf, after_s: f64) {
     let at = Instant::from_secs_f64(after_s.max(0.0));
     app.insert_resource(AutoScreenshot::new(path));
-    app.insert_resource(Pacing { speed: Speed::Max, stop_at: Some(at), ..Pacing::default() });
+    app.insert_resource(Pacing::max_until(at));
     app.add_systems(Update, screenshot_when_due.after(SimSystems::Step));
 }
 
