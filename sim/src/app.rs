@@ -1,9 +1,10 @@
 //! The Bevy shell around the lockstep runner.
 //!
 //! [`make_app`] builds the same app for headless runs and (with feature `window`) for the
-//! interactive window. [`SimPlugin`] only registers the [`Sim`] resource and one system in
-//! `FixedUpdate`, in the public [`SimSystems`] set; the runner itself is plain Rust
-//! ([`crate::runner::Lockstep`]), so a run also works without Bevy.
+//! interactive window: it inserts the resources and adds [`SimPlugin`] (headless) or the
+//! window's plugins, which sit above [`crate::plugin`] (module order: `plugin` ← `window` ←
+//! `app`, no circle). The runner itself is plain Rust ([`crate::runner::Lockstep`]), so a run
+//! also works without Bevy.
 //!
 //! Headless, one `app.update()` runs [`TICKS_PER_UPDATE`] fixed ticks
 //! (`TimeUpdateStrategy::FixedTimesteps`) of [`HEADLESS_STEPS_PER_TICK`] lockstep steps each, on
@@ -20,16 +21,16 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+use std::path::PathBuf;
+
 use bevy::MinimalPlugins;
-use bevy::app::{App, FixedUpdate, Plugin, PluginGroup, TaskPoolOptions, TaskPoolPlugin};
+use bevy::app::{App, FixedUpdate, PluginGroup, TaskPoolOptions, TaskPoolPlugin};
 use bevy::app::{FixedMain, FixedMainScheduleOrder, Main, MainScheduleOrder, RunFixedMainLoop};
-use bevy::ecs::schedule::{
-    InternedScheduleLabel, IntoScheduleConfigs, ScheduleLabel, SingleThreadedExecutor, SystemSet,
-};
-use bevy::ecs::system::{Res, ResMut};
-use bevy::prelude::{Resource, Time, Virtual};
+use bevy::ecs::schedule::{InternedScheduleLabel, ScheduleLabel, SingleThreadedExecutor};
+use bevy::prelude::{Time, Virtual};
 use bevy::time::{Fixed, TimeUpdateStrategy};
 
+pub use crate::plugin::{Sim, SimPlugin, SimSystems, StepsPerTick};
 use crate::runner::Lockstep;
 
 /// Fixed ticks per `app.update()` in headless mode.
@@ -37,49 +38,109 @@ pub const TICKS_PER_UPDATE: u32 = 20;
 /// Lockstep steps per fixed tick in headless mode (see [`StepsPerTick`]).
 pub const HEADLESS_STEPS_PER_TICK: u32 = 10;
 
-/// How many lockstep steps one `FixedUpdate` tick runs; the fixed timestep is this many `dt`.
-/// Headless runs batch [`HEADLESS_STEPS_PER_TICK`] steps so that Bevy's per-tick cost (about
-/// 1.6 µs measured here, half a physics step) stays small; tests that want one physics step per
-/// `app.update()` use [`make_app_with`] and 1.
-#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
-pub struct StepsPerTick(pub u32);
-
 /// How the app is shown.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Mode {
     /// No window: as fast as the CPU allows.
     Headless,
-    /// One window, the world beside Cute's map, paced to wall time × a speed factor by
-    /// `crate::window::pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing).
+    /// One window, the world beside Cute's map, paced to wall time × a speed factor by the
+    /// window's `pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing).
     #[cfg(feature = "window")]
     Window,
 }
 
-/// The run being simulated.
-#[derive(Resource)]
-pub struct Sim(pub Lockstep);
-
-/// The simulation's systems, in `FixedUpdate`.
-#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
-pub enum SimSystems {
-    /// One lockstep step: boards, Carto, Cute, physics.
-    Step,
+/// Window screenshots (tests, docs).
+#[derive(clap::Args, Clone, Debug)]
+pub struct ScreenshotArgs {
+    /// Run at full speed to --screenshot-after sim seconds, save a PNG of the window, exit
+    /// (implies --window).
+    #[arg(long, value_name = "FILE")]
+    pub screenshot: Option<PathBuf>,
+    /// Sim seconds before the screenshot.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    pub screenshot_after: f64,
 }
 
-/// Registers the run and the fixed-step system.
-pub struct SimPlugin;
+impl ScreenshotArgs {
+    /// No screenshot.
+    pub fn none() -> ScreenshotArgs {
+        ScreenshotArgs { screenshot: None, screenshot_after: 10.0 }
+    }
 
-impl Plugin for SimPlugin {
-    fn build(&self, app: &mut App) {
-        app.add_systems(FixedUpdate, step_lockstep.in_set(SimSystems::Step));
+    /// The screenshot's file and sim time, when one is asked for.
+    pub fn request(&self) -> Result<Option<(PathBuf, f64)>, WindowError> {
+        match &self.screenshot {
+            None => Ok(None),
+            Some(_) if !(self.screenshot_after.is_finite() && self.screenshot_after >= 0.0) => {
+                Err(WindowError::BadScreenshotTime)
+            }
+            Some(path) => Ok(Some((path.clone(), self.screenshot_after))),
+        }
     }
 }
 
-fn step_lockstep(mut sim: ResMut<Sim>, steps: Res<StepsPerTick>) {
-    for _ in 0..steps.0 {
-        if !sim.0.step() {
+/// `explobot window`'s arguments.
+#[derive(clap::Args, Clone, Debug)]
+pub struct WindowArgs {
+    /// Scenario file (RON); the built-in default room when omitted.
+    pub scenario: Option<PathBuf>,
+    /// Seed for every random process (default: the scenario's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub shot: ScreenshotArgs,
+}
+
+/// The headless app no longer held the run at its end (a system removed [`Sim`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("the simulation resource disappeared")]
+pub struct LostRun;
+
+/// Runs `run` to its end in the headless app, calling `progress` before every `update()` (a
+/// progress bar).
+pub fn run_headless(run: Lockstep, mut progress: impl FnMut(&Lockstep)) -> Result<Lockstep, LostRun> {
+    let mut app = make_app(Mode::Headless, run);
+    loop {
+        let sim = &app.world().resource::<Sim>().0;
+        if sim.is_finished() {
             break;
         }
+        progress(sim);
+        app.update();
+    }
+    app.world_mut().remove_resource::<Sim>().map(|sim| sim.0).ok_or(LostRun)
+}
+
+/// The window could not be opened.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum WindowError {
+    /// This build has no window (feature `window` off).
+    #[error(
+        "this explobot was built without the window; rebuild with `cargo build --release -p sim --features window`"
+    )]
+    NotBuilt,
+    /// The screenshot time is not a number of seconds >= 0.
+    #[error("--screenshot-after must be a number of seconds >= 0")]
+    BadScreenshotTime,
+}
+
+/// Opens the window on `run` until it is closed (or, with a screenshot asked for, until the
+/// picture is saved); whether the app ended well.
+pub fn run_window(run: Lockstep, shot: &ScreenshotArgs) -> Result<bool, WindowError> {
+    let shot = shot.request()?;
+    #[cfg(feature = "window")]
+    {
+        let mut app = make_app(Mode::Window, run);
+        if let Some((path, after_s)) = shot {
+            crate::window::request_screenshot(&mut app, path, after_s);
+        }
+        Ok(app.run().is_success())
+    }
+    #[cfg(not(feature = "window"))]
+    {
+        let _ = (run, shot);
+        Err(WindowError::NotBuilt)
     }
 }
 

@@ -5,7 +5,11 @@
 //!   cast on *every* step (the worst case the target is stated for).
 //! * **full stack** — a whole scenario run (Cute ⇄ Carto ⇄ boards ⇄ physics, real bytes on every
 //!   link) in the lockstep runner, headless, on one thread.
+//!
+//! The tables are built here ([`physics_header`], [`physics_rows`], [`full_stack_header`],
+//! [`full_stack_row`]); `explobot bench` prints them.
 
+use std::path::PathBuf;
 use std::time::Instant as WallInstant;
 
 use rand::SeedableRng;
@@ -15,7 +19,81 @@ use robot_model::pose::Twist;
 use robot_model::time::{Duration, Instant};
 
 use crate::body::RobotBody;
-use crate::scenario::LoadedScenario;
+use crate::report::Report;
+use crate::scenario::{LoadedScenario, ScenarioError};
+
+/// `explobot bench`'s arguments.
+#[derive(clap::Args, Clone, Debug)]
+pub struct BenchArgs {
+    /// Scenarios (default: the built-in default room).
+    pub scenarios: Vec<PathBuf>,
+    /// Physics steps per round of a physics measurement.
+    #[arg(long, default_value_t = 100_000)]
+    pub steps: u64,
+    /// Rounds per physics measurement (the median and the best round are printed).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u16).range(1..))]
+    pub rounds: u16,
+    /// Only the physics figures.
+    #[arg(long)]
+    pub physics_only: bool,
+}
+
+impl BenchArgs {
+    /// The scenarios asked for, loaded (the built-in default room when none is named).
+    pub fn load(&self) -> Result<Vec<LoadedScenario>, ScenarioError> {
+        if self.scenarios.is_empty() {
+            return Ok(vec![LoadedScenario::builtin_default()?]);
+        }
+        self.scenarios.iter().map(|p| LoadedScenario::load(p)).collect()
+    }
+}
+
+/// The physics table's title and column heads.
+pub fn physics_header(steps: u64, rounds: u16) -> String {
+    format!(
+        "physics: {steps} steps of the robot in each room, {rounds} rounds per variant, one thread\n{:<20} {:<12} {:>16} {:>14} {:>12} {:>11}",
+        "scenario", "sonar", "median steps/s", "best steps/s", "x real time", "collisions"
+    )
+}
+
+/// One physics table line per figure of scenario `name`, each ending in a newline.
+pub fn physics_rows(name: &str, figures: &[PhysicsFigure], dt: Duration) -> String {
+    let mut out = String::new();
+    for f in figures {
+        let label = match f.sonar {
+            SonarLoad::Off => "off",
+            SonarLoad::PerCycle => "60 ms cycle",
+            SonarLoad::EveryStep => "every step",
+        };
+        out += &format!(
+            "{:<20} {:<12} {:>16.0} {:>14.0} {:>12.0} {:>11}\n",
+            name,
+            label,
+            f.median_steps_per_s(),
+            f.best_steps_per_s(),
+            f.real_time_factor(dt),
+            f.collisions
+        );
+    }
+    out
+}
+
+/// The full-stack table's title and column heads.
+pub fn full_stack_header() -> String {
+    format!(
+        "full stack: Cute + Carto + boards + physics, real bytes on every link, headless\n{:<20} {:>10} {:>10} {:>12} {:>10}",
+        "scenario", "sim s", "wall s", "x real time", "result"
+    )
+}
+
+/// One full-stack table line for a finished run's report.
+pub fn full_stack_row(r: &Report) -> String {
+    let verdict = if r.passed { "pass" } else { "FAIL" };
+    format!(
+        "{:<20} {:>10.1} {:>10.2} {:>12.0} {:>10}",
+        r.scenario, r.sim_time_s, r.wall_time_s, r.real_time_factor, verdict
+    )
+}
 
 /// How the sonar is exercised in a physics benchmark.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -94,7 +172,7 @@ pub fn physics(loaded: &LoadedScenario, steps: u64, rounds: usize) -> Vec<Physic
 fn physics_round(loaded: &LoadedScenario, steps: u64, sonar: SonarLoad) -> (f64, u32) {
     let scenario = &loaded.scenario;
     let profile = &loaded.profile;
-    let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
+    let dt = loaded.dt();
     let mut body = RobotBody::new(scenario, profile, loaded.start_pose(), dt);
     let kin = MecanumKinematics::from_profile(profile);
     let pattern = [

@@ -75,10 +75,11 @@ use rapier2d::parry::shape::Shape;
 use robot_model::profile::RobotProfile;
 use serde::{Deserialize, Serialize};
 
-use crate::grid::{self, TruthGrid};
+use crate::grid;
 use crate::scenario::{
     Expectations, Heading, LoadedScenario, Obstacle, PhysicsSettings, Scenario, Start, Step, polygon_area,
 };
+use crate::truth::RobotTruth;
 
 /// Sub-seeds tried for one (style, seed) before giving up.
 const MAX_SUB_SEEDS: u32 = 64;
@@ -453,7 +454,7 @@ struct Shaped {
 }
 
 fn shaped(o: &Obstacle) -> Option<Shaped> {
-    let (pose, shape) = grid::obstacle_shape(o)?;
+    let (pose, shape) = o.shape()?;
     let aabb = shape.compute_aabb(&pose);
     Some(Shaped { pose, shape, lo: (aabb.mins.x, aabb.mins.y), hi: (aabb.maxs.x, aabb.maxs.y) })
 }
@@ -902,7 +903,8 @@ fn free_standing(
     angle: &dyn Fn(&mut ChaCha8Rng) -> f32,
     build: &dyn Fn(Pt, f32) -> Item,
 ) -> Option<(Pt, f32)> {
-    let (x0, y0, x1, y1) = grid::bounds(region);
+    let aabb = grid::room_aabb(region);
+    let (x0, y0, x1, y1) = (aabb.mins.x, aabb.mins.y, aabb.maxs.x, aabb.maxs.y);
     for _ in 0..24 {
         let center = (uniform(rng, x0, x1), uniform(rng, y0, y1));
         if !grid::point_in_polygon(region, center.0, center.1) {
@@ -1636,7 +1638,8 @@ fn irregular_outline(rng: &mut ChaCha8Rng) -> Vec<Pt> {
                 }
             }
         }
-        let (x0, y0, _, _) = grid::bounds(&poly);
+        let aabb = grid::room_aabb(&poly);
+        let (x0, y0) = (aabb.mins.x, aabb.mins.y);
         let poly: Vec<Pt> = poly.iter().map(|&(x, y)| (mm(x - x0), mm(y - y0))).collect();
         if is_simple(&poly) {
             return poly;
@@ -1811,7 +1814,12 @@ fn can_drive(shapes: &[Shaped], profile: &RobotProfile, from: Pt, to: Pt) -> boo
 /// A start cell where the robot can turn on the spot and drive to a free neighbour, drawn from
 /// the largest connected free area first.
 fn choose_start(s: &Scenario, profile: &RobotProfile, rng: &mut ChaCha8Rng) -> Option<Start> {
-    let grid = TruthGrid::build(s, profile);
+    let grid = RobotTruth::build(
+        grid::room_frame(&s.room, s.cell_size(profile)),
+        &s.room,
+        &s.obstacle_shapes(),
+        profile,
+    );
     let shapes = scenario_shapes(s);
     let (rows, cols) = (grid.rows, grid.cols);
     let mut label = vec![usize::MAX; rows * cols];
@@ -2009,7 +2017,12 @@ mod tests {
         assert!((radius - 0.177).abs() < 0.001);
         for s in corpus() {
             let sc = s.room.scenario();
-            let grid = TruthGrid::build(sc, &profile);
+            let grid = RobotTruth::build(
+                grid::room_frame(&sc.room, sc.cell_size(&profile)),
+                &sc.room,
+                &sc.obstacle_shapes(),
+                &profile,
+            );
             let (r, c) = (usize::from(sc.start.row), usize::from(sc.start.col));
             let centre = grid.frame.cell_center(r, c);
             let clearance = sc.obstacles.iter().map(|o| distance_to(o, centre)).fold(f32::MAX, f32::min);
@@ -2178,7 +2191,12 @@ mod tests {
         let profile = RobotProfile::default();
         let pocket = |s: &Sample| {
             let sc = s.room.scenario();
-            let grid = TruthGrid::build(sc, &profile);
+            let grid = RobotTruth::build(
+                grid::room_frame(&sc.room, sc.cell_size(&profile)),
+                &sc.room,
+                &sc.obstacle_shapes(),
+                &profile,
+            );
             let reach = grid.reachable_from((usize::from(sc.start.row), usize::from(sc.start.col)));
             (0..grid.rows).any(|r| (0..grid.cols).any(|c| grid.is_free(r, c) && !reach[r * grid.cols + c]))
         };

@@ -1,20 +1,30 @@
-//! The planning grid laid over a room, and the ground truth Cute's map is scored against.
+//! The planning grid laid over a room, and the room's geometry as parry shapes.
 //!
 //! The grid covers the room's bounding box with whole cells; what is left over is split evenly
-//! as a margin on each side. Row 0 is the top row (largest world `y`), column 0 the leftmost. A
-//! cell is **free** in the ground truth when its square lies inside the room and touches no
-//! obstacle; **reachable** cells are the free cells 4-connected to the start cell.
+//! as a margin on each side. Row 0 is the top row (largest world `y`), column 0 the leftmost.
+//! What the robot can do on that grid — the ground truth Cute's map is scored against — is
+//! [`crate::truth::RobotTruth`].
+//!
+//! This module knows polygons and parry shapes, not scenarios: [`crate::scenario`] turns its
+//! obstacles into shapes and builds the truth once per scenario
+//! ([`crate::scenario::LoadedScenario::truth`]).
+//!
+//! ```
+//! use sim::grid::room_frame;
+//! let frame = room_frame(&[(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)], 0.3);
+//! assert_eq!((frame.rows, frame.cols), (3, 4));
+//! assert_eq!(frame.cell_at(0.06, 0.9), Some((0, 0)));
+//! ```
 
 use rapier2d::parry::bounding_volume::Aabb;
 use rapier2d::parry::math::{Pose, Vector};
-use rapier2d::parry::query;
-use rapier2d::parry::shape::{Ball, ConvexPolygon, Cuboid, Segment, Shape};
+use rapier2d::parry::shape::{Segment, Shape};
 pub use rapier2d::parry::utils::point_in_poly2d;
-use robot_model::profile::RobotProfile;
-
-use crate::scenario::{Obstacle, Scenario};
 
 pub use robot_model::grid::{GridFrame, MAX_CELLS};
+
+/// A fixed shape and where it stands in the world.
+pub type PlacedShape = (Pose, Box<dyn Shape>);
 
 /// The planning grid over `room`'s bounding box with cells of `cell` metres.
 pub fn room_frame(room: &[(f32, f32)], cell: f32) -> GridFrame {
@@ -22,75 +32,9 @@ pub fn room_frame(room: &[(f32, f32)], cell: f32) -> GridFrame {
     GridFrame::for_bounds((aabb.mins.x, aabb.mins.y), (aabb.maxs.x, aabb.maxs.y), cell)
 }
 
-/// Which cells of the grid are free in the real room.
-#[derive(Debug, Clone)]
-pub struct TruthGrid {
-    /// The grid's placement.
-    pub frame: GridFrame,
-    /// Number of rows.
-    pub rows: usize,
-    /// Number of columns.
-    pub cols: usize,
-    free: Vec<bool>,
-}
-
-impl TruthGrid {
-    /// Rasterises the scenario's room and obstacles.
-    pub fn build(scenario: &Scenario, profile: &RobotProfile) -> TruthGrid {
-        let frame = room_frame(&scenario.room, scenario.cell_size(profile));
-        let room = room_points(&scenario.room);
-        let shapes: Vec<(Pose, Box<dyn Shape>)> =
-            scenario.obstacles.iter().filter_map(obstacle_shape).collect();
-        let walls: Vec<Segment> = room_edges(&scenario.room).collect();
-        // Obstacles are tested against the closed cell square: a thin wall lying on the edge
-        // between two cells blocks both, as the robot cannot cross it. The room's own walls are
-        // tested against a square shrunk by 1 mm, so a room that is a whole number of cells wide
-        // keeps its edge cells.
-        let half = frame.cell * 0.5 - 1e-3;
-        let square = Cuboid::new(Vector::new(half, half));
-        let closed = Cuboid::new(Vector::new(frame.cell * 0.5, frame.cell * 0.5));
-        let identity = Pose::IDENTITY;
-        let mut free = Vec::with_capacity(frame.rows * frame.cols);
-        for row in 0..frame.rows {
-            for col in 0..frame.cols {
-                let (cx, cy) = frame.cell_center(row, col);
-                let at = Pose::from_translation(Vector::new(cx, cy));
-                let inside = [(-half, -half), (half, -half), (half, half), (-half, half)]
-                    .iter()
-                    .all(|&(dx, dy)| point_in_poly2d(Vector::new(cx + dx, cy + dy), &room));
-                let crosses_wall = walls.iter().any(|w| intersects(&at, &square, &identity, w));
-                let hits_obstacle = shapes.iter().any(|(pose, s)| intersects(&at, &closed, pose, s.as_ref()));
-                free.push(inside && !crosses_wall && !hits_obstacle);
-            }
-        }
-        TruthGrid { frame, rows: frame.rows, cols: frame.cols, free }
-    }
-
-    /// Whether (row, col) is on the grid and free.
-    pub fn is_free(&self, row: usize, col: usize) -> bool {
-        row < self.rows && col < self.cols && self.free[row * self.cols + col]
-    }
-
-    /// For every cell, whether it is free and 4-connected to `start`; row-major.
-    pub fn reachable_from(&self, start: (usize, usize)) -> Vec<bool> {
-        robot_model::grid::reachable(self.rows, self.cols, start, |(r, c)| self.is_free(r, c), |_, _| true)
-    }
-}
-
-/// Whether two shapes overlap; a pair parry cannot test counts as overlapping (safe side).
-fn intersects(p1: &Pose, s1: &dyn Shape, p2: &Pose, s2: &dyn Shape) -> bool {
-    query::intersection_test(p1, s1, p2, s2).map_or(true, |i| i.intersecting)
-}
-
 /// A polygon's bounding box (empty polygon: `mins` above `maxs`).
 pub fn room_aabb(room: &[(f32, f32)]) -> Aabb {
     Aabb::from_points(room.iter().map(|&(x, y)| Vector::new(x, y)))
-}
-
-/// A polygon's bounding box as (min x, min y, max x, max y), metres.
-pub fn bounds(room: &[(f32, f32)]) -> (f32, f32, f32, f32) {
-    let aabb = room_aabb(room);
-    (aabb.mins.x, aabb.mins.y, aabb.maxs.x, aabb.maxs.y)
 }
 
 /// Width and height of a polygon's bounding box, metres.
@@ -119,87 +63,19 @@ pub fn room_edges(room: &[(f32, f32)]) -> impl Iterator<Item = Segment> + '_ {
     })
 }
 
-/// The collision shape and placement of an obstacle (`None` for a degenerate polygon).
-pub fn obstacle_shape(o: &Obstacle) -> Option<(Pose, Box<dyn Shape>)> {
-    match o {
-        Obstacle::Box { center, size, angle_deg } => Some((
-            Pose::new(Vector::new(center.0, center.1), angle_deg.to_radians()),
-            Box::new(Cuboid::new(Vector::new(size.0 * 0.5, size.1 * 0.5))),
-        )),
-        Obstacle::Circle { center, radius } => {
-            Some((Pose::from_translation(Vector::new(center.0, center.1)), Box::new(Ball::new(*radius))))
-        }
-        Obstacle::Segment { from, to } => Some((
-            Pose::IDENTITY,
-            Box::new(Segment::new(Vector::new(from.0, from.1), Vector::new(to.0, to.1))),
-        )),
-        Obstacle::Polygon { points } => {
-            let pts: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
-            ConvexPolygon::from_convex_hull(&pts).map(|p| (Pose::IDENTITY, Box::new(p) as Box<dyn Shape>))
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scenario::Scenario;
-
-    fn scenario(obstacles: &str) -> Scenario {
-        let text = format!(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)], \
-             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
-        );
-        Scenario::from_ron_str(&text, "t.ron").unwrap()
-    }
 
     #[test]
     fn grid_is_centred_in_the_room_with_whole_cells() {
-        // The frame itself is tested in robot_model::grid; here, that the room's truth uses it.
-        let s = scenario("");
-        let g = TruthGrid::build(&s, &RobotProfile::default());
-        assert_eq!((g.rows, g.cols), (3, 4));
-        assert!((g.frame.left - 0.05).abs() < 1e-5);
-        assert!((g.frame.top - 0.925).abs() < 1e-5);
-        assert_eq!(g.frame.cell_at(0.06, 0.9), Some((0, 0)));
-        assert_eq!(g.frame.cell_at(1.24, 0.03), Some((2, 3)));
-        assert_eq!(g.frame.cell_at(1.29, 0.5), None);
-        assert!((0..3).all(|r| (0..4).all(|c| g.is_free(r, c))));
-    }
-
-    #[test]
-    fn obstacles_block_the_cells_they_touch() {
-        // A box over the centre of cell (1, 1) and a leg straddling columns 1 and 2 of row 0 (x = 0.65).
-        let s = scenario(
-            "Box(center: (0.5, 0.475), size: (0.1, 0.1)), Circle(center: (0.65, 0.8), radius: 0.02)",
-        );
-        let g = TruthGrid::build(&s, &RobotProfile::default());
-        assert!(!g.is_free(1, 1));
-        assert!(!g.is_free(0, 1) && !g.is_free(0, 2));
-        assert!(g.is_free(2, 3));
-        let reach = g.reachable_from((0, 0));
-        assert!(!reach[g.cols + 1]);
-        assert!(reach[2 * g.cols + 3]);
-    }
-
-    #[test]
-    fn a_thin_wall_on_a_cell_edge_blocks_both_cells() {
-        let s = scenario("Segment(from: (0.65, 0.0), to: (0.65, 0.95))");
-        let g = TruthGrid::build(&s, &RobotProfile::default());
-        assert!((0..3).all(|r| !g.is_free(r, 1) && !g.is_free(r, 2)));
-        assert!(!g.reachable_from((0, 0))[3]);
-    }
-
-    #[test]
-    fn an_enclosed_pocket_is_free_but_unreachable() {
-        // Walls around cell (2, 3), the bottom-right corner cell (x 0.95..1.25, y 0.025..0.325),
-        // standing in its neighbours (2, 2) and (1, 3).
-        let s = scenario(
-            "Segment(from: (0.94, 0.0), to: (0.94, 0.335)), Segment(from: (0.94, 0.335), to: (1.3, 0.335))",
-        );
-        let g = TruthGrid::build(&s, &RobotProfile::default());
-        assert!(g.is_free(2, 3));
-        assert!(!g.is_free(2, 2) && !g.is_free(1, 3));
-        assert!(!g.reachable_from((0, 0))[2 * g.cols + 3]);
+        // The frame itself is tested in robot_model::grid; here, that the room's bounds feed it.
+        let room = [(0.0, 0.0), (1.3, 0.0), (1.3, 0.95), (0.0, 0.95)];
+        let f = room_frame(&room, 0.3);
+        assert_eq!((f.rows, f.cols), (3, 4));
+        assert!((f.left - 0.05).abs() < 1e-5);
+        assert!((f.top - 0.925).abs() < 1e-5);
+        assert_eq!(room_extent(&room), (1.3, 0.95));
+        assert!(point_in_polygon(&room, 0.1, 0.1) && !point_in_polygon(&room, 1.31, 0.1));
     }
 }

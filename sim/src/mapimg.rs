@@ -4,14 +4,17 @@
 //! each grid cell is tinted by what Cute's map says (free green, obstacle red, unknown left
 //! untinted), then the grid lines, the robot's trail (blue) and its final pose (a box with a line
 //! towards its heading). A cell that is red over white floor, or green over black, is a map error.
+//! The room itself is rasterised by [`crate::raster`], as the window's floor is.
 
 use image::{Rgb, RgbImage};
-use rapier2d::parry::math::Vector;
-use rapier2d::parry::query::PointQuery;
-use rapier2d::parry::shape::Shape;
 
-use crate::grid::{GridFrame, bounds, obstacle_shape, point_in_poly2d, room_points};
+use crate::grid::GridFrame;
+use crate::raster::{Palette, PixelGrid, RoomShapes, bounds};
 use crate::scenario::Scenario;
+
+/// The true room in `map.png`.
+pub const PALETTE: Palette =
+    Palette { outside: [90, 90, 90], obstacle: [20, 20, 20], floor: [255, 255, 255] };
 
 /// Pixels per metre for rooms up to ~25 m; larger rooms are scaled down to fit [`MAX_SIDE`].
 const SCALE: f32 = 160.0;
@@ -39,40 +42,24 @@ pub struct MapPicture<'a> {
 impl MapPicture<'_> {
     /// Renders the picture.
     pub fn render(&self) -> RgbImage {
-        let (min_x, min_y, max_x, max_y) = bounds(&self.scenario.room);
+        let ((min_x, min_y), (max_x, max_y)) = bounds(&self.scenario.room);
         let extent = (max_x - min_x).max(max_y - min_y).max(1e-3);
         let scale = SCALE.min(MAX_SIDE / extent);
         let w = ((max_x - min_x) * scale).clamp(1.0, MAX_SIDE) as u32 + 2 * BORDER;
         let h = ((max_y - min_y) * scale).clamp(1.0, MAX_SIDE) as u32 + 2 * BORDER;
-        let to_world = |px: u32, py: u32| {
-            (
-                min_x + (px as f32 + 0.5 - BORDER as f32) / scale,
-                max_y - (py as f32 + 0.5 - BORDER as f32) / scale,
-            )
-        };
-        let to_px =
-            |x: f32, y: f32| ((x - min_x) * scale + BORDER as f32, (max_y - y) * scale + BORDER as f32);
-        let shapes: Vec<_> = self.scenario.obstacles.iter().filter_map(obstacle_shape).collect();
-        let room = room_points(&self.scenario.room);
-        let mut img = RgbImage::new(w.max(1), h.max(1));
-        for (px, py, pixel) in img.enumerate_pixels_mut() {
-            let (x, y) = to_world(px, py);
-            let mut c = if !point_in_poly2d(Vector::new(x, y), &room) {
-                [90, 90, 90]
-            } else if shapes.iter().any(|(pose, s)| contains(pose, s.as_ref(), x, y)) {
-                [20, 20, 20]
-            } else {
-                [255, 255, 255]
-            };
-            if let Some((row, col)) = self.frame.cell_at(x, y) {
-                match self.known.get(row * self.frame.cols + col).copied().flatten() {
-                    Some(true) => c = blend(c, [60, 200, 90], 0.35),
-                    Some(false) => c = blend(c, [230, 40, 40], 0.55),
-                    None => {}
-                }
+        let grid = PixelGrid { min_x, max_y, scale, border: BORDER as f32, width: w, height: h };
+        let to_px = |x: f32, y: f32| grid.to_px(x, y);
+        let pixels = RoomShapes::new(self.scenario).paint(&grid, &PALETTE, |x, y, c| {
+            match self.frame.cell_at(x, y).and_then(|(row, col)| self.known.get(row * self.frame.cols + col))
+            {
+                Some(Some(true)) => blend(c, [60, 200, 90], 0.35),
+                Some(Some(false)) => blend(c, [230, 40, 40], 0.55),
+                _ => c,
             }
-            *pixel = Rgb(c);
-        }
+        });
+        let mut img = RgbImage::from_fn(w, h, |px, py| {
+            Rgb(pixels.get((py * w + px) as usize).copied().unwrap_or_default())
+        });
         // Grid lines.
         let f = self.frame;
         for row in 0..=f.rows {
@@ -99,14 +86,6 @@ impl MapPicture<'_> {
         line(&mut img, to_px(x, y), corner(hl * 1.6, 0.0), [0, 0, 160]);
         img
     }
-}
-
-fn contains(pose: &rapier2d::parry::math::Pose, shape: &dyn Shape, x: f32, y: f32) -> bool {
-    shape.contains_point(pose, Vector::new(x, y))
-        || shape.as_segment().is_some_and(|seg| {
-            let p = pose.inverse_transform_point(Vector::new(x, y));
-            seg.distance_to_local_point(p, true) < 0.012
-        })
 }
 
 fn blend(base: [u8; 3], tint: [u8; 3], alpha: f32) -> [u8; 3] {

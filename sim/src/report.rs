@@ -12,9 +12,9 @@ use std::fmt::Write as _;
 
 use serde::Serialize;
 
-use crate::grid::TruthGrid;
 use crate::localisation::Localisation;
 use crate::scenario::Expectations;
+use crate::truth::RobotTruth;
 
 /// Traffic on one direction of one link.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -66,7 +66,7 @@ pub struct MapScore {
 
 impl MapScore {
     /// Scores `known` (row-major; `Some(true)` free, `Some(false)` obstacle, `None` unknown).
-    pub fn score(truth: &TruthGrid, start: (usize, usize), known: &[Option<bool>]) -> MapScore {
+    pub fn score(truth: &RobotTruth, start: (usize, usize), known: &[Option<bool>]) -> MapScore {
         let reachable = truth.reachable_from(start);
         let mut s = MapScore::default();
         for row in 0..truth.rows {

@@ -24,12 +24,13 @@ use transport::{
 };
 
 use crate::body::RobotBody;
-use crate::grid::{GridFrame, TruthGrid};
+use crate::grid::GridFrame;
 use crate::localisation::Localisation;
 use crate::mission::Operator;
 use crate::record::{EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario};
+use crate::truth::RobotTruth;
 use crate::twin::{Twin, WriteBudget};
 
 /// Cute's end of the Cute ⇄ Carto link.
@@ -116,7 +117,7 @@ pub struct Lockstep {
     operator: Operator,
     faults: Vec<Fault>,
     faults_fired: Vec<bool>,
-    truth: TruthGrid,
+    truth: RobotTruth,
     traces: Vec<(String, String, TraceHandle)>,
     logs: Vec<EndpointLog>,
     /// The link-log hash, computed once the run is over (the logs no longer change then).
@@ -132,8 +133,8 @@ impl Lockstep {
         let scenario = &loaded.scenario;
         let profile = &loaded.profile;
         let seed = seed.unwrap_or(scenario.seed);
-        let dt = Duration::from_secs_f64(f64::from(scenario.physics.step_ms) / 1000.0);
-        let truth = TruthGrid::build(scenario, profile);
+        let dt = loaded.dt();
+        let truth = loaded.truth().clone();
         let start = scenario.start;
         let twin = Twin::new(&loaded, seed, dt);
         let clock = MockClock::new();
@@ -361,7 +362,7 @@ impl Lockstep {
     }
 
     /// The ground truth.
-    pub fn truth(&self) -> &TruthGrid {
+    pub fn truth(&self) -> &RobotTruth {
         &self.truth
     }
 

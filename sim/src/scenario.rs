@@ -6,19 +6,42 @@
 //! over is split evenly as a margin on each side. A cell is free in the ground truth when its
 //! square lies inside the room and touches no obstacle.
 //!
-//! Errors name the file, line and column:
+//! Errors name the file, line and column of the value that is wrong, as ron's parser finds it
+//! (`source`): a value that fails its own check (`values`: a negative radius, a fault time
+//! below zero) is refused while serde reads it; a check that needs the robot profile or the grid
+//! (a `GoTo` off the grid, a start cell that is not free) finds its value again by path. Either
+//! way a key written twice is told apart:
 //!
 //! ```
-//! let err = sim::scenario::Scenario::from_ron_str("Scenario(name: 1)", "bad.ron").unwrap_err();
-//! assert!(err.to_string().starts_with("bad.ron:1:"));
+//! let text = "Scenario(name: \"x\", room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0)],
+//!     start: (row: 0, col: 0, heading: East),
+//!     faults: [GuiDisconnect(at_s: 1.0),
+//!              GuiDisconnect(at_s: -1.0)])";
+//! let err = sim::scenario::Scenario::from_ron_str(text, "bad.ron").unwrap_err();
+//! assert!(err.to_string().starts_with("bad.ron:4:34: faults[1].at_s:"), "{err}");
 //! ```
+//!
+//! [`LoadedScenario`] adds the resolved robot profile and computes once what every user reads:
+//! the grid frame, the ground truth ([`RobotTruth`]) and the step `dt`.
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
+use rapier2d::parry::math::{Pose, Vector};
+use rapier2d::parry::shape::{Ball, ConvexPolygon, Cuboid, Segment, Shape};
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
+use robot_model::time::Duration;
 use serde::{Deserialize, Serialize};
+
+use crate::grid::{GridFrame, MAX_CELLS, PlacedShape, room_extent, room_frame};
+use crate::truth::RobotTruth;
+
+mod source;
+mod values;
+
+pub use source::ScenarioError;
+use source::{Key, field};
+pub use values::polygon_area;
 
 /// The built-in default room (`explobot run` with no argument).
 pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/default.ron");
@@ -32,30 +55,37 @@ pub enum Obstacle {
     /// A rectangle: centre, full size (width along x, height along y), rotation in degrees.
     Box {
         /// Centre, metres.
+        #[serde(deserialize_with = "values::point")]
         center: (f32, f32),
         /// Full width and height, metres.
+        #[serde(deserialize_with = "values::size")]
         size: (f32, f32),
         /// Rotation counter-clockwise, degrees.
-        #[serde(default)]
+        #[serde(default, deserialize_with = "values::finite")]
         angle_deg: f32,
     },
     /// A disc (a table leg, a bin).
     Circle {
         /// Centre, metres.
+        #[serde(deserialize_with = "values::point")]
         center: (f32, f32),
         /// Radius, metres.
+        #[serde(deserialize_with = "values::length")]
         radius: f32,
     },
-    /// A thin wall from one point to another.
+    /// A thin wall from one point to another (two different points).
     Segment {
         /// One end, metres.
+        #[serde(deserialize_with = "values::point")]
         from: (f32, f32),
         /// The other end, metres.
+        #[serde(deserialize_with = "values::point")]
         to: (f32, f32),
     },
     /// A convex polygon (its convex hull is used).
     Polygon {
         /// Vertices, metres.
+        #[serde(deserialize_with = "values::convex_points")]
         points: Vec<(f32, f32)>,
     },
 }
@@ -76,8 +106,10 @@ pub struct Start {
 #[serde(default, deny_unknown_fields)]
 pub struct PhysicsSettings {
     /// Fixed physics step, milliseconds.
+    #[serde(deserialize_with = "values::step_ms")]
     pub step_ms: f32,
     /// Hard limit on simulated time, seconds: the run stops there whatever the mission says.
+    #[serde(deserialize_with = "values::positive_s")]
     pub max_sim_s: f32,
 }
 
@@ -106,10 +138,13 @@ pub struct NoiseSettings {
 #[serde(default, deny_unknown_fields)]
 pub struct LinkFaults {
     /// Probability that a byte gets one bit flipped.
+    #[serde(deserialize_with = "values::rate")]
     pub corrupt_rate: f64,
     /// Probability that a byte is lost.
+    #[serde(deserialize_with = "values::rate")]
     pub drop_rate: f64,
     /// Extra one-way latency, milliseconds.
+    #[serde(deserialize_with = "values::latency_ms")]
     pub latency_ms: f32,
 }
 
@@ -142,6 +177,7 @@ pub enum Fault {
     /// The Cute ⇄ Carto connection drops at `at_s`; Cute is expected to reconnect by itself.
     GuiDisconnect {
         /// When, seconds of sim time.
+        #[serde(deserialize_with = "values::non_negative_s")]
         at_s: f32,
     },
 }
@@ -162,7 +198,7 @@ pub enum Step {
     /// Press "Reset map".
     ResetMap,
     /// Let this many seconds of sim time pass.
-    Wait(f32),
+    Wait(#[serde(deserialize_with = "values::non_negative_s")] f32),
 }
 
 /// What the run must achieve; each present field is checked and reported.
@@ -170,12 +206,15 @@ pub enum Step {
 #[serde(default, deny_unknown_fields)]
 pub struct Expectations {
     /// Minimum fraction (0–1) of reachable cells that Cute's map shows as free.
+    #[serde(deserialize_with = "values::fraction")]
     pub coverage_min: Option<f64>,
     /// Minimum fraction (0–1) of the cells Cute has classified that agree with the true room.
+    #[serde(deserialize_with = "values::fraction")]
     pub map_accuracy_min: Option<f64>,
     /// Maximum number of collisions between the robot and anything.
     pub collisions_max: Option<u32>,
     /// The mission must end within this many seconds of sim time.
+    #[serde(deserialize_with = "values::optional_positive_s")]
     pub finish_within_s: Option<f64>,
     /// The robot's final cell (row, column).
     pub reached: Option<(u8, u8)>,
@@ -197,6 +236,7 @@ pub struct Expectations {
 #[serde(deny_unknown_fields)]
 pub struct Scenario {
     /// Short name; also the output folder `runs/NAME`.
+    #[serde(deserialize_with = "values::name")]
     pub name: String,
     /// One or two sentences on what the scenario tests.
     #[serde(default)]
@@ -208,9 +248,10 @@ pub struct Scenario {
     #[serde(default)]
     pub seed: u64,
     /// Grid cell size, metres (default: the profile's).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "values::cell")]
     pub cell: Option<f32>,
     /// The outer walls: a simple polygon, metres.
+    #[serde(deserialize_with = "values::room")]
     pub room: Vec<(f32, f32)>,
     /// Obstacles inside the room.
     #[serde(default)]
@@ -237,34 +278,11 @@ pub struct Scenario {
     pub expect: Expectations,
 }
 
-/// A scenario that could not be loaded: where and why.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ScenarioError {
-    /// The file (or label) the text came from.
-    pub file: String,
-    /// 1-based line, when known.
-    pub line: usize,
-    /// 1-based column, when known.
-    pub column: usize,
-    /// What is wrong.
-    pub message: String,
-}
-
-impl fmt::Display for ScenarioError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}: {}", self.file, self.line, self.column, self.message)
-    }
-}
-
-impl std::error::Error for ScenarioError {}
-
-impl ScenarioError {
-    fn whole_file(file: &str, message: impl Into<String>) -> Self {
-        ScenarioError { file: file.to_string(), line: 1, column: 1, message: message.into() }
-    }
-}
-
-/// A scenario with its robot profile resolved, ready to run.
+/// A scenario with its robot profile resolved, ready to run, and what its runs read from it
+/// computed once.
+///
+/// *NOTE*: the cached grid and `dt` follow from `scenario` and `profile` as they were loaded;
+/// build a new one (e.g. [`LoadedScenario::with_profile`]) rather than editing those fields.
 #[derive(Debug, Clone)]
 pub struct LoadedScenario {
     /// The scenario as written.
@@ -277,21 +295,24 @@ pub struct LoadedScenario {
     pub text: String,
     /// How errors and recordings name the scenario (its path, or `<built-in default room>`).
     pub label: String,
+    truth: RobotTruth,
+    dt: Duration,
 }
 
 impl Scenario {
     /// Parses and validates a scenario; `file` is used in error messages.
     pub fn from_ron_str(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
-        let scenario: Scenario = ron::from_str(text).map_err(|e| ScenarioError {
-            file: file.to_string(),
-            line: e.span.start.line,
-            column: e.span.start.col,
-            message: e.code.to_string(),
-        })?;
-        scenario.validate().map_err(|message| {
-            let (line, column) = locate(text, &message.anchor);
-            ScenarioError { file: file.to_string(), line, column, message: message.text }
-        })?;
+        let scenario: Scenario = source::parse(text, file)?;
+        // The one check on a value that needs two of its fields.
+        for (i, o) in scenario.obstacles.iter().enumerate() {
+            if let Obstacle::Segment { from, to } = o
+                && from == to
+            {
+                let path = [field("obstacles"), Key::Index(i)];
+                let message = format!("obstacles[{i}]: a segment needs two different ends");
+                return Err(ScenarioError::at(file, text, &path, message));
+            }
+        }
         Ok(scenario)
     }
 
@@ -300,107 +321,91 @@ impl Scenario {
         self.cell.unwrap_or(profile.grid_cell_m)
     }
 
-    fn validate(&self) -> Result<(), Invalid> {
-        if self.name.is_empty()
-            || !self.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-        {
-            return Err(Invalid::at("name", "name must be non-empty ASCII letters, digits, '-' or '_'"));
-        }
-        if self.room.len() < 3 {
-            return Err(Invalid::at("room", "room needs at least 3 corners"));
-        }
-        if self.room.iter().any(|&(x, y)| !x.is_finite() || !y.is_finite()) {
-            return Err(Invalid::at("room", "room corners must be finite numbers"));
-        }
-        if polygon_area(&self.room).abs() < 1e-6 {
-            return Err(Invalid::at("room", "room polygon has no area"));
-        }
-        if let Some(cell) = self.cell
-            && !(cell.is_finite() && (0.05..=5.0).contains(&cell))
-        {
-            return Err(Invalid::at("cell", "cell must be between 0.05 and 5 metres"));
-        }
-        if !(self.physics.step_ms.is_finite() && (0.1..=50.0).contains(&self.physics.step_ms)) {
-            return Err(Invalid::at("step_ms", "physics step_ms must be between 0.1 and 50"));
-        }
-        if !(self.physics.max_sim_s.is_finite() && self.physics.max_sim_s > 0.0) {
-            return Err(Invalid::at("max_sim_s", "max_sim_s must be positive"));
-        }
-        for (i, o) in self.obstacles.iter().enumerate() {
-            let positive = |v: f32| v.is_finite() && v > 0.0;
-            let ok = match o {
-                Obstacle::Box { center, size, angle_deg } => {
-                    finite2(*center) && positive(size.0) && positive(size.1) && angle_deg.is_finite()
-                }
-                Obstacle::Circle { center, radius } => finite2(*center) && positive(*radius),
-                Obstacle::Segment { from, to } => finite2(*from) && finite2(*to) && from != to,
-                // A polygon whose points are all on a line has no convex hull.
-                Obstacle::Polygon { points } => {
-                    points.iter().all(|p| finite2(*p)) && crate::grid::obstacle_shape(o).is_some()
-                }
-            };
-            if !ok {
-                return Err(Invalid::at(
-                    "obstacles",
-                    &format!(
-                        "obstacle {i} (counting from 0) has a non-finite, empty, negative or flat shape"
-                    ),
-                ));
+    /// The fixed physics step.
+    pub fn dt(&self) -> Duration {
+        Duration::from_secs_f64(f64::from(self.physics.step_ms) / 1000.0)
+    }
+
+    /// Every obstacle's collision shape and placement.
+    pub fn obstacle_shapes(&self) -> Vec<PlacedShape> {
+        self.obstacles.iter().filter_map(Obstacle::shape).collect()
+    }
+}
+
+impl Obstacle {
+    /// The collision shape and placement (`None` for a polygon with no hull, which parsing
+    /// refuses).
+    pub fn shape(&self) -> Option<PlacedShape> {
+        match self {
+            Obstacle::Box { center, size, angle_deg } => Some((
+                Pose::new(Vector::new(center.0, center.1), angle_deg.to_radians()),
+                Box::new(Cuboid::new(Vector::new(size.0 * 0.5, size.1 * 0.5))),
+            )),
+            Obstacle::Circle { center, radius } => {
+                Some((Pose::from_translation(Vector::new(center.0, center.1)), Box::new(Ball::new(*radius))))
+            }
+            Obstacle::Segment { from, to } => Some((
+                Pose::IDENTITY,
+                Box::new(Segment::new(Vector::new(from.0, from.1), Vector::new(to.0, to.1))),
+            )),
+            Obstacle::Polygon { points } => {
+                let pts: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
+                ConvexPolygon::from_convex_hull(&pts).map(|p| (Pose::IDENTITY, Box::new(p) as Box<dyn Shape>))
             }
         }
-        for fault in &self.faults {
-            let Fault::GuiDisconnect { at_s } = fault;
-            if !(at_s.is_finite() && *at_s >= 0.0) {
-                return Err(Invalid::at("at_s", "fault times are zero or positive seconds"));
-            }
-        }
-        if let Some(limit) = self.expect.finish_within_s
-            && !(limit.is_finite() && limit > 0.0)
-        {
-            return Err(Invalid::at("finish_within_s", "finish_within_s must be positive"));
-        }
-        for links in [&self.links.motor, &self.links.sensor, &self.links.gui] {
-            if !(0.0..=1.0).contains(&links.corrupt_rate) || !(0.0..=1.0).contains(&links.drop_rate) {
-                return Err(Invalid::at("links", "link fault rates must be between 0 and 1"));
-            }
-            if !(links.latency_ms.is_finite() && links.latency_ms >= 0.0) {
-                return Err(Invalid::at("latency_ms", "latency_ms must be zero or positive"));
-            }
-        }
-        for step in &self.mission {
-            if let Step::Wait(s) = step
-                && !(s.is_finite() && *s >= 0.0)
-            {
-                return Err(Invalid::at("Wait(", "Wait takes a non-negative number of seconds"));
-            }
-        }
-        for (name, v) in
-            [("coverage_min", self.expect.coverage_min), ("map_accuracy_min", self.expect.map_accuracy_min)]
-        {
-            if let Some(v) = v
-                && !(0.0..=1.0).contains(&v)
-            {
-                return Err(Invalid::at(name, "fractions are between 0 and 1"));
-            }
-        }
-        Ok(())
     }
 }
 
 impl LoadedScenario {
+    /// The grid's placement in the world.
+    pub fn frame(&self) -> GridFrame {
+        self.truth.frame
+    }
+
+    /// Which cells are free in the real room.
+    pub fn truth(&self) -> &RobotTruth {
+        &self.truth
+    }
+
+    /// The fixed physics step.
+    pub fn dt(&self) -> Duration {
+        self.dt
+    }
+
     /// The robot's world pose at the start: the centre of its start cell, facing its start
     /// heading.
     pub fn start_pose(&self) -> Pose2 {
-        let frame = crate::grid::room_frame(&self.scenario.room, self.scenario.cell_size(&self.profile));
         let start = self.scenario.start;
-        let (x, y) = frame.cell_center(usize::from(start.row), usize::from(start.col));
+        let (x, y) = self.frame().cell_center(usize::from(start.row), usize::from(start.col));
         Pose2::new(x, y, start.heading.world_angle())
+    }
+
+    /// `explobot check`'s line for the file at `path`: `ok` with the grid and how many cells moves
+    /// connect to the start cell (the start cell included), or `FAIL` and the error.
+    pub fn check_line(path: &Path) -> (bool, String) {
+        match Self::load(path) {
+            Ok(l) => {
+                let start = (usize::from(l.scenario.start.row), usize::from(l.scenario.start.col));
+                let reachable = l.truth.reachable_from(start).iter().filter(|r| **r).count();
+                let (rows, cols) = (l.truth.rows, l.truth.cols);
+                (true, format!("ok   {}: {rows}x{cols} grid, {reachable} reachable cells", path.display()))
+            }
+            Err(e) => (false, format!("FAIL {e}")),
+        }
+    }
+
+    /// Loads `path`, or the built-in default room when there is none.
+    pub fn load_or_default(path: Option<&Path>) -> Result<LoadedScenario, ScenarioError> {
+        match path {
+            Some(path) => Self::load(path),
+            None => Self::builtin_default(),
+        }
     }
 
     /// Loads a scenario file and the robot profile it names.
     pub fn load(path: &Path) -> Result<LoadedScenario, ScenarioError> {
         let label = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = robot_model::files::read_text_bounded(path, robot_model::files::TEXT_FILE_LIMIT)
             .map_err(|e| ScenarioError::whole_file(&label, format!("cannot read scenario: {e}")))?;
         let scenario = Scenario::from_ron_str(&text, &label)?;
         let base = path.parent().unwrap_or(Path::new("."));
@@ -410,8 +415,7 @@ impl LoadedScenario {
     /// The built-in default room with the default robot.
     pub fn builtin_default() -> Result<LoadedScenario, ScenarioError> {
         let label = "<built-in default room>";
-        let scenario = Scenario::from_ron_str(DEFAULT_SCENARIO, label)?;
-        let mut scenario = scenario;
+        let mut scenario = Scenario::from_ron_str(DEFAULT_SCENARIO, label)?;
         scenario.robot = None;
         Self::resolve(scenario, Path::new("."), None, DEFAULT_SCENARIO, label)
     }
@@ -430,6 +434,17 @@ impl LoadedScenario {
         Self::resolve(scenario, Path::new("."), None, &text, &label)
     }
 
+    /// A scenario run with a given robot profile, its overrides already applied (a recording's):
+    /// no robot file is read. `text` and `label` are the scenario's, for errors.
+    pub fn with_profile(
+        scenario: Scenario,
+        profile: RobotProfile,
+        text: &str,
+        label: &str,
+    ) -> Result<LoadedScenario, ScenarioError> {
+        Self::checked(scenario, profile, None, text, label)
+    }
+
     fn resolve(
         scenario: Scenario,
         base: &Path,
@@ -437,51 +452,57 @@ impl LoadedScenario {
         text: &str,
         label: &str,
     ) -> Result<LoadedScenario, ScenarioError> {
+        let at = |path: &[Key], message: String| ScenarioError::at(label, text, path, message);
         let mut profile = match &scenario.robot {
             None => RobotProfile::default(),
-            Some(rel) => {
-                let p = base.join(rel);
-                RobotProfile::load(&p).map_err(|e| {
-                    let (line, column) = locate(text, "robot");
-                    ScenarioError {
-                        file: label.to_string(),
-                        line,
-                        column,
-                        message: format!("robot profile: {e}"),
-                    }
-                })?
-            }
+            Some(rel) => RobotProfile::load(&base.join(rel))
+                .map_err(|e| at(&[field("robot")], format!("robot profile: {e}")))?,
         };
-        let at = |key: &str, message: String| {
-            let (line, column) = locate(text, key);
-            ScenarioError { file: label.to_string(), line, column, message }
-        };
+        // The overrides must leave a valid robot (a negative friction would break the physics):
+        // each is tried alone first, so the error points at the one that breaks it.
+        for (name, one) in noise_overrides(&scenario.noise) {
+            let mut alone = profile.clone();
+            apply_noise(&mut alone, &one);
+            alone
+                .validate()
+                .map_err(|e| at(&[field("noise"), field(name)], format!("noise overrides: {e}")))?;
+        }
         apply_noise(&mut profile, &scenario.noise);
-        // The overrides must leave a valid robot (a negative friction would break the physics).
-        profile.validate().map_err(|e| at("noise", format!("noise overrides: {e}")))?;
+        profile.validate().map_err(|e| at(&[field("noise")], format!("noise overrides: {e}")))?;
+        Self::checked(scenario, profile, path, text, label)
+    }
+
+    /// Checks the scenario against the grid its profile gives and computes what is cached.
+    fn checked(
+        scenario: Scenario,
+        profile: RobotProfile,
+        path: Option<PathBuf>,
+        text: &str,
+        label: &str,
+    ) -> Result<LoadedScenario, ScenarioError> {
+        let at = |path: &[Key], message: String| ScenarioError::at(label, text, path, message);
         let cell = scenario.cell_size(&profile);
-        let frame = crate::grid::room_frame(&scenario.room, cell);
-        let (width, height) = crate::grid::room_extent(&scenario.room);
-        let max = crate::grid::MAX_CELLS as f32 * cell;
+        let frame = room_frame(&scenario.room, cell);
+        let (width, height) = room_extent(&scenario.room);
+        let max = MAX_CELLS as f32 * cell;
         if width > max || height > max {
             return Err(at(
-                "room",
+                &[field("room")],
                 format!(
-                    "room is {width:.2} m x {height:.2} m: at most {} cells of {cell} m a side fit the link protocol's one-byte coordinates",
-                    crate::grid::MAX_CELLS
+                    "room is {width:.2} m x {height:.2} m: at most {MAX_CELLS} cells of {cell} m a side fit the link protocol's one-byte coordinates"
                 ),
             ));
         }
         if frame.rows == 0 || frame.cols == 0 {
-            return Err(at("room", format!("room is smaller than one {cell} m cell")));
+            return Err(at(&[field("room")], format!("room is smaller than one {cell} m cell")));
         }
         let on_grid = |(row, col): (u8, u8)| usize::from(row) < frame.rows && usize::from(col) < frame.cols;
-        for step in &scenario.mission {
+        for (i, step) in scenario.mission.iter().enumerate() {
             if let Step::GoTo(row, col) = *step
                 && !on_grid((row, col))
             {
                 return Err(at(
-                    "GoTo(",
+                    &[field("mission"), Key::Index(i)],
                     format!("GoTo({row}, {col}) is off the {}x{} grid", frame.rows, frame.cols),
                 ));
             }
@@ -490,26 +511,48 @@ impl LoadedScenario {
             && !on_grid(reached)
         {
             return Err(at(
-                "reached",
+                &[field("expect"), field("reached")],
                 format!("reached {reached:?} is off the {}x{} grid", frame.rows, frame.cols),
             ));
         }
-        let loaded =
-            LoadedScenario { scenario, profile, path, text: text.to_string(), label: label.to_string() };
         // The start cell must be on the grid and free, or nothing can run.
-        let grid = crate::grid::TruthGrid::build(&loaded.scenario, &loaded.profile);
-        let start = loaded.scenario.start;
-        if !grid.is_free(start.row as usize, start.col as usize) {
+        let truth = RobotTruth::build(frame, &scenario.room, &scenario.obstacle_shapes(), &profile);
+        let start = scenario.start;
+        if !truth.is_free(start.row as usize, start.col as usize) {
             return Err(at(
-                "start",
+                &[field("start")],
                 format!(
                     "start cell ({}, {}) is not a free cell of the {}x{} grid",
-                    start.row, start.col, grid.rows, grid.cols
+                    start.row, start.col, truth.rows, truth.cols
                 ),
             ));
         }
-        Ok(loaded)
+        let dt = scenario.dt();
+        Ok(LoadedScenario {
+            scenario,
+            profile,
+            path,
+            text: text.to_string(),
+            label: label.to_string(),
+            truth,
+            dt,
+        })
     }
+}
+
+/// Each override that is set, alone, with the name it has in the file.
+fn noise_overrides(noise: &NoiseSettings) -> Vec<(&'static str, NoiseSettings)> {
+    let none = NoiseSettings::default();
+    let drift = noise.imu_drift_deg_per_min;
+    [
+        ("sonar_sigma_cm", NoiseSettings { sonar_sigma_cm: noise.sonar_sigma_cm, ..none.clone() }),
+        ("imu_sigma_deg", NoiseSettings { imu_sigma_deg: noise.imu_sigma_deg, ..none.clone() }),
+        ("imu_drift_deg_per_min", NoiseSettings { imu_drift_deg_per_min: drift, ..none.clone() }),
+        ("friction", NoiseSettings { friction: noise.friction, ..none.clone() }),
+    ]
+    .into_iter()
+    .filter(|(_, one)| *one != none)
+    .collect()
 }
 
 fn apply_noise(profile: &mut RobotProfile, noise: &NoiseSettings) {
@@ -524,140 +567,5 @@ fn apply_noise(profile: &mut RobotProfile, noise: &NoiseSettings) {
     }
     if let Some(v) = noise.friction {
         profile.wheels.friction_mu = v;
-    }
-}
-
-struct Invalid {
-    anchor: String,
-    text: String,
-}
-
-impl Invalid {
-    fn at(anchor: &str, text: &str) -> Self {
-        Invalid { anchor: anchor.to_string(), text: text.to_string() }
-    }
-}
-
-/// Line and column (1-based) of the first place `key` is used as a field (`key:`) or, for a
-/// key ending in `(`, as a call — outside string literals and comments, at a word boundary. 1:1
-/// when it is not there.
-fn locate(text: &str, key: &str) -> (usize, usize) {
-    for (i, line) in text.lines().enumerate() {
-        let bytes = line.as_bytes();
-        let mut in_string = false;
-        let mut j = 0;
-        while j < bytes.len() {
-            match bytes[j] {
-                b'\\' if in_string => j += 1,
-                b'"' => in_string = !in_string,
-                b'/' if !in_string && bytes.get(j + 1) == Some(&b'/') => break,
-                _ if !in_string && line.get(j..).is_some_and(|rest| rest.starts_with(key)) => {
-                    let before_ok = j == 0 || !(bytes[j - 1].is_ascii_alphanumeric() || bytes[j - 1] == b'_');
-                    let rest = line.get(j + key.len()..).unwrap_or("").trim_start();
-                    if before_ok && (key.ends_with('(') || rest.starts_with(':')) {
-                        return (i + 1, j + 1);
-                    }
-                }
-                _ => {}
-            }
-            j += 1;
-        }
-    }
-    (1, 1)
-}
-
-fn finite2(p: (f32, f32)) -> bool {
-    p.0.is_finite() && p.1.is_finite()
-}
-
-/// Signed area of a polygon (positive when counter-clockwise).
-pub fn polygon_area(points: &[(f32, f32)]) -> f32 {
-    let n = points.len();
-    let mut twice = 0.0;
-    for i in 0..n {
-        let (x0, y0) = points[i];
-        let (x1, y1) = points[(i + 1) % n];
-        twice += x0 * y1 - x1 * y0;
-    }
-    twice * 0.5
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn default_room_loads() {
-        let loaded = LoadedScenario::builtin_default().unwrap();
-        assert_eq!(loaded.scenario.name, "default");
-        assert!(!loaded.scenario.mission.is_empty());
-    }
-
-    #[test]
-    fn syntax_error_reports_line_and_column() {
-        let text = "Scenario(\n  name: \"x\",\n  room: [(0.0, 0.0), (1.0, 0.0)\n";
-        let err = Scenario::from_ron_str(text, "rooms/x.ron").unwrap_err();
-        assert_eq!(err.file, "rooms/x.ron");
-        assert!(err.line >= 3, "{err}");
-    }
-
-    #[test]
-    fn unknown_field_is_named_with_its_position() {
-        let text = "Scenario(\n  name: \"x\",\n  rooom: [],\n)";
-        let err = Scenario::from_ron_str(text, "x.ron").unwrap_err();
-        assert_eq!((err.line, err.column), (3, 3), "{err}");
-        assert!(err.message.contains("rooom"), "{err}");
-    }
-
-    #[test]
-    fn semantic_error_points_at_the_field() {
-        let text = "Scenario(\n  name: \"x\",\n  room: [(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)],\n  start: (row: 0, col: 0, heading: East),\n)";
-        let err = Scenario::from_ron_str(text, "x.ron").unwrap_err();
-        assert_eq!(err.line, 3, "{err}");
-        assert!(err.message.contains("no area"), "{err}");
-    }
-
-    fn rejects(body: &str) -> ScenarioError {
-        let text = format!(
-            "Scenario(\n  name: \"x\",\n  description: \"a room: start here\",\n  room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],\n  start: (row: 0, col: 0, heading: East),\n{body}\n)"
-        );
-        LoadedScenario::from_ron_str(&text, "x.ron", Path::new(".")).unwrap_err()
-    }
-
-    #[test]
-    fn bad_values_are_rejected_where_they_are_written() {
-        // Line 6 is the first line of `body`; the description mentioning "start" and "room" is
-        // not mistaken for the fields.
-        let e = rejects("  noise: (friction: Some(-0.1)),");
-        assert_eq!((e.line, e.column), (6, 3), "{e}");
-        assert!(e.message.contains("friction"), "{e}");
-        let e = rejects("  obstacles: [Polygon(points: [(0.1, 0.1), (0.2, 0.2), (0.3, 0.3)])],");
-        assert_eq!(e.line, 6, "{e}");
-        assert!(e.message.contains("obstacle 0"), "{e}");
-        let e = rejects("  obstacles: [Circle(center: (0.5, 0.5), radius: inf)],");
-        assert_eq!(e.line, 6, "{e}");
-        let e = rejects("  mission: [StartCartography,\n    GoTo(5, 0)],");
-        assert_eq!((e.line, e.column), (7, 5), "{e}");
-        let e = rejects("  faults: [GuiDisconnect(at_s: -1.0)],");
-        assert_eq!(e.line, 6, "{e}");
-        let e = rejects("  expect: (reached: Some((9, 9))),");
-        assert_eq!(e.line, 6, "{e}");
-        let e = rejects("  cell: Some(0.001),");
-        assert_eq!(e.line, 6, "{e}");
-    }
-
-    #[test]
-    fn a_room_too_big_for_one_byte_coordinates_is_rejected() {
-        let text = "Scenario(name: \"big\", room: [(0.0, 0.0), (100.0, 0.0), (100.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
-        let e = LoadedScenario::from_ron_str(text, "big.ron", Path::new(".")).unwrap_err();
-        assert!(e.message.contains("256"), "{e}");
-    }
-
-    #[test]
-    fn start_cell_outside_the_room_is_rejected() {
-        let text = "Scenario(\n  name: \"x\",\n  room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],\n  start: (row: 9, col: 0, heading: East),\n)";
-        let err = LoadedScenario::from_ron_str(text, "x.ron", Path::new(".")).unwrap_err();
-        assert_eq!(err.line, 4, "{err}");
-        assert!(err.message.contains("start cell"), "{err}");
     }
 }

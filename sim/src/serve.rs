@@ -3,7 +3,8 @@
 //! The motor board and the sensor board appear as pseudo-terminals (stable symlinks
 //! `run/tty-motor` and `run/tty-sensor`, real paths printed) or as TCP ports, so an unchanged
 //! `carto` binary opens them exactly as it would open `/dev/ttyAMA0` and `/dev/ttyUSB0`. The
-//! physics steps at its fixed `dt`, paced to the wall clock times `speed`.
+//! physics steps at its fixed `dt`, paced to the wall clock times `speed` ([`crate::pacing`], as
+//! the window is).
 //!
 //! A pty ignores baud settings, so the twin enforces each UART's byte budget itself
 //! (`baud / 10` bytes per second, a 64-byte FIFO of credit): a sensor configuration that
@@ -11,16 +12,22 @@
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use robot_model::time::{Duration, Instant};
 use transport::{Clock, Error, Link, Listener, PtyLink, TcpLink, TcpListenerLink};
 
+use crate::pacing::Owed;
 use crate::scenario::LoadedScenario;
 use crate::twin::{Twin, WriteBudget};
 
 /// Largest burst a UART may send at once, bytes (its FIFO).
 const FIFO: f64 = 64.0;
+/// Most simulated time the twin catches up in one pass, seconds: after a longer stall (a
+/// suspended process, a too-high speed) it drops the backlog instead of racing through it, so it
+/// stays responsive and Ctrl-C works.
+const MAX_CATCH_UP_S: f64 = 0.05;
 
 /// Where the boards are exposed.
 #[derive(Debug, Clone)]
@@ -50,6 +57,95 @@ pub struct ServeOptions {
     pub duration: Option<Duration>,
     /// Print a status line this often (simulated time; `None` = never).
     pub status_every: Option<Duration>,
+}
+
+/// `explobot sim --serve`'s arguments.
+#[derive(clap::Args, Clone, Debug)]
+pub struct ServeArgs {
+    /// Scenario file (RON); the built-in default room when omitted.
+    pub scenario: Option<PathBuf>,
+    /// Serve the boards (required: the twin has no other real-time mode).
+    #[arg(long, required = true)]
+    pub serve: bool,
+    /// Expose the boards as TCP ports BASE (motor) and BASE+1 (sensor) instead of ptys.
+    #[arg(long, value_name = "BASE")]
+    pub tcp: Option<u16>,
+    /// Address the TCP ports bind to.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: String,
+    /// Folder for the pty symlinks.
+    #[arg(long, default_value = "run")]
+    pub run_dir: PathBuf,
+    /// Simulated seconds per wall-clock second.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+    /// Stop after this many simulated seconds (default: run until Ctrl-C).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Seed (default: the scenario's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Print the robot's pose this often, simulated seconds (0 = never).
+    #[arg(long, default_value_t = 1.0)]
+    pub status_every: f64,
+}
+
+impl ServeArgs {
+    /// The serving options these arguments ask for, or what is wrong with them.
+    pub fn options(&self) -> Result<ServeOptions, String> {
+        if !(self.speed.is_finite() && self.speed > 0.0) {
+            return Err("--speed must be a positive number".to_string());
+        }
+        let ports = match self.tcp {
+            Some(base) => {
+                let sensor = base.checked_add(1).ok_or("--tcp BASE must leave room for BASE+1")?;
+                let addr = |port: u16| {
+                    format!("{}:{port}", self.bind)
+                        .parse()
+                        .map_err(|e| format!("bad --bind address {}: {e}", self.bind))
+                };
+                Ports::Tcp { motor: addr(base)?, sensor: addr(sensor)? }
+            }
+            None => Ports::Pty { dir: self.run_dir.clone() },
+        };
+        Ok(ServeOptions {
+            ports,
+            speed: self.speed,
+            duration: self.duration.map(Duration::from_secs_f64),
+            status_every: (self.status_every > 0.0).then(|| Duration::from_secs_f64(self.status_every)),
+        })
+    }
+
+    /// What is printed once the ports are open: where the boards are and how to start Carto.
+    pub fn ready_text(&self, scenario_name: &str, motor: &str, sensor: &str) -> String {
+        let transport = if self.tcp.is_some() { "tcp" } else { "sim" };
+        format!(
+            "twin of '{scenario_name}' serving at {}x real time\nmotor board  {motor}\nsensor board {sensor}\nstart Carto with: carto --transport {transport}",
+            self.speed
+        )
+    }
+}
+
+/// A flag that Ctrl-C sets, for [`serve`]'s `stop`.
+pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let on_signal = stop.clone();
+    ctrlc::set_handler(move || on_signal.store(true, Ordering::SeqCst))?;
+    Ok(stop)
+}
+
+/// The status line printed every `status_every`: time, pose, cell and wheel setpoints.
+pub fn status_line(now: Instant, twin: &Twin) -> String {
+    let p = twin.body().pose();
+    let cell = twin.cell().map_or("off grid".to_string(), |(r, c)| format!("({r}, {c})"));
+    format!(
+        "t={:>8.2}s  x={:.3} y={:.3} heading={:6.1}deg  cell {cell}  wheels {:?} rpm",
+        now.as_secs_f64(),
+        p.x,
+        p.y,
+        p.theta.to_degrees(),
+        twin.motor_board().wheel_setpoints_rpm().map(|v| v.round())
+    )
 }
 
 /// One board's port: a pty, or a TCP listener with at most one client.
@@ -169,7 +265,8 @@ pub fn serve(
     mut status: impl FnMut(Instant, &Twin),
 ) -> Result<(), Error> {
     let seed = seed.unwrap_or(loaded.scenario.seed);
-    let dt = Duration::from_secs_f64(f64::from(loaded.scenario.physics.step_ms) / 1000.0);
+    let dt = loaded.dt();
+    let dt_s = dt.as_secs_f64();
     let mut twin = Twin::new(loaded, seed, dt);
     let (mut motor, mut sensor) = open_ports(&options.ports)?;
     ready(&motor.describe(), &sensor.describe());
@@ -177,22 +274,21 @@ pub fn serve(
     let mut sensor_pacer = Pacer::new(loaded.profile.serial.sensor_baud);
     let mut now = Instant::ZERO;
     let mut next_status = options.status_every.map(|d| Instant::ZERO + d);
-    // Simulated time owed to the wall clock is caught up at most this much per pass; after a
-    // longer stall (a suspended process, a too-high speed) the twin drops the backlog instead of
-    // racing through it, so it stays responsive and Ctrl-C works.
-    let max_catch_up = Duration::from_millis(50);
-    let mut offset_micros = 0.0f64;
+    let speed = options.speed.max(1e-6);
+    let mut owed = Owed::default();
+    let mut last_wall = Instant::ZERO;
     while !stop.load(Ordering::SeqCst) {
-        let mut wall = clock.now().total_micros() as f64 * options.speed.max(1e-6) - offset_micros;
-        let behind = wall - now.total_micros() as f64;
-        if behind > max_catch_up.total_micros() as f64 {
-            let dropped = behind - max_catch_up.total_micros() as f64;
-            offset_micros += dropped;
-            wall -= dropped;
-            tracing::warn!(behind_ms = behind / 1000.0, "twin fell behind the wall clock; skipping ahead");
+        let wall = clock.now();
+        let wall_s = wall.total_micros().saturating_sub(last_wall.total_micros()) as f64 / 1e6;
+        last_wall = wall;
+        let behind_s = owed.seconds() + wall_s * speed;
+        if owed.add(wall_s, speed, MAX_CATCH_UP_S) > 0.0 {
+            tracing::warn!(behind_ms = behind_s * 1000.0, "twin fell behind the wall clock; skipping ahead");
         }
-        while (now + dt).total_micros() as f64 <= wall && !stop.load(Ordering::SeqCst) {
+        let mut done = 0;
+        while done < owed.steps(dt_s) && !stop.load(Ordering::SeqCst) {
             now += dt;
+            done += 1;
             let budget = WriteBudget { motor: motor_pacer.tick(dt), sensor: sensor_pacer.tick(dt) };
             let io = twin.board_io(now, &mut motor, &mut sensor, budget);
             motor_pacer.spend(io.motor_sent);
@@ -205,6 +301,7 @@ pub fn serve(
                 next_status = options.status_every.map(|d| at + d);
             }
         }
+        owed.ran(done, dt_s);
         if options.duration.is_some_and(|d| now >= Instant::ZERO + d) {
             break;
         }

@@ -23,12 +23,14 @@
 //!   the robot cannot turn there.
 //!
 //! ```
+//! use sim::grid::room_frame;
 //! use sim::scenario::Scenario;
 //! use sim::truth::RobotTruth;
 //! use robot_model::profile::RobotProfile;
 //! let s = Scenario::from_ron_str("Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.6), (0.0, 0.6)], \
 //!     start: (row: 0, col: 0, heading: East), obstacles: [Segment(from: (0.6, 0.0), to: (0.6, 0.6))])", "t.ron").unwrap();
-//! let t = RobotTruth::build(&s, &RobotProfile::default());
+//! let p = RobotProfile::default();
+//! let t = RobotTruth::build(room_frame(&s.room, s.cell_size(&p)), &s.room, &s.obstacle_shapes(), &p);
 //! assert!(t.is_free(0, 1) && t.is_free(0, 2));
 //! assert!(!t.can_move((0, 1), (0, 2))); // the wall lies on the line between them
 //! assert!(!t.reachable_from((0, 0))[2]);
@@ -37,12 +39,11 @@
 use rapier2d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier2d::parry::math::{Pose, Vector};
 use rapier2d::parry::query;
-use rapier2d::parry::shape::{Ball, Cuboid, Shape};
+use rapier2d::parry::shape::{Ball, Cuboid, Segment, Shape};
 use robot_model::grid::{GridFrame, reachable};
 use robot_model::profile::RobotProfile;
 
-use crate::grid::{obstacle_shape, point_in_poly2d, room_edges, room_frame, room_points};
-use crate::scenario::Scenario;
+use crate::grid::{PlacedShape, point_in_poly2d, room_edges, room_points};
 
 /// Which ways the robot fits standing at a cell's centre.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -65,6 +66,10 @@ impl Stand {
 pub struct RobotTruth {
     /// The grid's placement.
     pub frame: GridFrame,
+    /// Number of rows (`frame.rows`).
+    pub rows: usize,
+    /// Number of columns (`frame.cols`).
+    pub cols: usize,
     stand: Vec<Stand>,
     /// Move (r, c) ⇄ (r, c + 1) exists.
     east: Vec<bool>,
@@ -74,23 +79,19 @@ pub struct RobotTruth {
 }
 
 /// The room's walls and obstacles as parry shapes, with bounding boxes for a quick reject.
-struct Solids {
+struct Solids<'a> {
     room: Vec<Vector>,
-    shapes: Vec<(Pose, Box<dyn Shape>, Aabb)>,
+    walls: Vec<(Segment, Aabb)>,
+    obstacles: Vec<(&'a Pose, &'a dyn Shape, Aabb)>,
 }
 
-impl Solids {
-    fn new(scenario: &Scenario) -> Solids {
-        let mut shapes: Vec<(Pose, Box<dyn Shape>, Aabb)> = Vec::new();
-        for wall in room_edges(&scenario.room) {
-            let aabb = wall.compute_aabb(&Pose::IDENTITY);
-            shapes.push((Pose::IDENTITY, Box::new(wall), aabb));
+impl<'a> Solids<'a> {
+    fn new(room: &[(f32, f32)], obstacles: &'a [PlacedShape]) -> Solids<'a> {
+        Solids {
+            room: room_points(room),
+            walls: room_edges(room).map(|w| (w, w.compute_aabb(&Pose::IDENTITY))).collect(),
+            obstacles: obstacles.iter().map(|(p, s)| (p, s.as_ref(), s.compute_aabb(p))).collect(),
         }
-        for (pose, shape) in scenario.obstacles.iter().filter_map(obstacle_shape) {
-            let aabb = shape.compute_aabb(&pose);
-            shapes.push((pose, shape, aabb));
-        }
-        Solids { room: room_points(&scenario.room), shapes }
     }
 
     /// Whether `shape` at `pose` lies in the room and touches nothing. A pair parry cannot test
@@ -100,18 +101,25 @@ impl Solids {
             return false;
         }
         let aabb = shape.compute_aabb(pose);
-        self.shapes.iter().all(|(p, s, b)| {
+        let apart = |p: &Pose, s: &dyn Shape, b: &Aabb| {
             !aabb.intersects(b)
-                || query::intersection_test(pose, shape, p, s.as_ref()).is_ok_and(|hit| !hit.intersecting)
-        })
+                || query::intersection_test(pose, shape, p, s).is_ok_and(|hit| !hit.intersecting)
+        };
+        self.walls.iter().all(|(w, b)| apart(&Pose::IDENTITY, w, b))
+            && self.obstacles.iter().all(|(p, s, b)| apart(p, *s, b))
     }
 }
 
 impl RobotTruth {
-    /// Measures every cell and move of `scenario`'s grid for the robot of `profile`.
-    pub fn build(scenario: &Scenario, profile: &RobotProfile) -> RobotTruth {
-        let frame = room_frame(&scenario.room, scenario.cell_size(profile));
-        let solids = Solids::new(scenario);
+    /// Measures every cell and move of the grid `frame` over `room` (a polygon) with
+    /// `obstacles`, for the robot of `profile`.
+    pub fn build(
+        frame: GridFrame,
+        room: &[(f32, f32)],
+        obstacles: &[PlacedShape],
+        profile: &RobotProfile,
+    ) -> RobotTruth {
+        let solids = Solids::new(room, obstacles);
         let (length, width) = (profile.geometry.body_length_m, profile.geometry.body_width_m);
         let (half_l, half_w) = (length * 0.5, width * 0.5);
         let along_rows = Cuboid::new(Vector::new(half_l, half_w));
@@ -146,7 +154,7 @@ impl RobotTruth {
                 }
             }
         }
-        RobotTruth { frame, stand, east, south, turn }
+        RobotTruth { frame, rows: frame.rows, cols: frame.cols, stand, east, south, turn }
     }
 
     fn index(&self, row: usize, col: usize) -> Option<usize> {
@@ -211,8 +219,14 @@ mod tests {
             "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
              start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
         );
-        let s = Scenario::from_ron_str(&text, "t.ron").unwrap();
-        RobotTruth::build(&s, &RobotProfile::default())
+        let s = crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap();
+        let p = RobotProfile::default();
+        RobotTruth::build(
+            crate::grid::room_frame(&s.room, s.cell_size(&p)),
+            &s.room,
+            &s.obstacle_shapes(),
+            &p,
+        )
     }
 
     #[test]

@@ -88,11 +88,12 @@ pub struct Twin {
 }
 
 impl Twin {
-    /// The scenario's robot at its start cell, boards powered on at time zero.
+    /// The scenario's robot at its start cell, boards powered on at time zero, stepping by `dt`
+    /// (the runtimes pass [`LoadedScenario::dt`]).
     pub fn new(loaded: &LoadedScenario, seed: u64, dt: Duration) -> Twin {
         let scenario = &loaded.scenario;
         let profile = &loaded.profile;
-        let frame = crate::grid::room_frame(&scenario.room, scenario.cell_size(profile));
+        let frame = loaded.frame();
         let start = loaded.start_pose();
         Twin {
             body: RobotBody::new(scenario, profile, start, dt),

@@ -21,8 +21,8 @@ use rapier2d::prelude::*;
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
 
-use crate::grid::{obstacle_shape, room_edges};
-use crate::scenario::Scenario;
+use crate::grid::room_edges;
+use crate::scenario::{Obstacle, Scenario};
 
 /// Separation below which the robot starts touching something, metres. Rapier reports contact
 /// pairs from 2 cm apart (its prediction distance) and its manifold distances date from before
@@ -75,7 +75,7 @@ impl SimWorld {
         let obstacles = scenario
             .obstacles
             .iter()
-            .filter_map(obstacle_shape)
+            .filter_map(Obstacle::shape)
             .map(|(pose, shape)| (pose, SharedShape(std::sync::Arc::from(shape))));
         let fixed_shapes: Vec<(Pose, SharedShape)> = walls.chain(obstacles).collect();
         for (pose, shape) in &fixed_shapes {

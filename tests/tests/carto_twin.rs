@@ -73,7 +73,7 @@ fn rig(obstacles: &str) -> Rig {
         motor_carto,
         sensor_carto,
     );
-    let frame = sim::grid::room_frame(&loaded.scenario.room, loaded.scenario.cell_size(&profile));
+    let frame = loaded.frame();
     let mut rig = Rig {
         clock,
         now: Instant::ZERO,

@@ -6,7 +6,6 @@
 use std::path::{Path, PathBuf};
 
 use sim::generate::{RoomStyle, generate};
-use sim::grid::TruthGrid;
 use sim::scenario::LoadedScenario;
 
 fn example(style: RoomStyle) -> PathBuf {
@@ -33,8 +32,8 @@ fn the_examples_pass_the_check_with_a_reachable_start() {
     for style in RoomStyle::ALL {
         let loaded = LoadedScenario::load(&example(style)).unwrap_or_else(|e| panic!("{e}"));
         let s = &loaded.scenario;
-        let grid = TruthGrid::build(s, &loaded.profile);
-        let reachable = grid
+        let reachable = loaded
+            .truth()
             .reachable_from((usize::from(s.start.row), usize::from(s.start.col)))
             .iter()
             .filter(|r| **r)

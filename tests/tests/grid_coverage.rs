@@ -8,7 +8,6 @@
 use cute::cartography::Cartographer;
 use cute::gridsim::{FakeRobot, World};
 use cute::map::Map;
-use sim::grid::TruthGrid;
 use sim::scenario::LoadedScenario;
 
 #[test]
@@ -20,7 +19,7 @@ fn cartography_maps_every_reachable_cell_of_every_scenario_room() {
             continue;
         }
         let loaded = LoadedScenario::load(&path).unwrap();
-        let truth = TruthGrid::build(&loaded.scenario, &loaded.profile);
+        let truth = loaded.truth();
         let (rows, cols) = (truth.rows, truth.cols);
         let blocked = (0..rows * cols).map(|i| !truth.is_free(i / cols, i % cols)).collect();
         let world = World::from_cells(rows, cols, blocked).unwrap();
