@@ -12,6 +12,7 @@ pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod serve;
+pub mod sweep;
 pub mod twin;
 #[cfg(feature = "window")]
 pub mod window;

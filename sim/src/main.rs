@@ -122,6 +122,8 @@ enum Command {
     /// Write a realistic generated room (flat, office, warehouse, pillars, irregular) as a
     /// scenario file; the same style and seed always give the same file.
     Generate(sim::generate::GenerateArgs),
+    /// Run many rooms × seeds on every core (or one shard of them), or merge shard folders.
+    Sweep(sim::sweep::SweepArgs),
 }
 
 /// Window screenshots (tests, docs).
@@ -175,6 +177,7 @@ fn main() -> ExitCode {
         }
         Command::Check { scenarios } => check(&scenarios),
         Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
+        Command::Sweep(args) => args.run().map_err(anyhow::Error::from),
     };
     match result {
         Ok(code) => code,
