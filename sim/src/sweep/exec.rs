@@ -139,7 +139,7 @@ pub fn execute(plan: &Plan, run: Run, timeout_s: Option<f64>) -> Finished {
             };
             let reason = match verdict {
                 Verdict::Timeout => Some(format!(
-                    "stopped by --timeout {:.0} s at {:.1} s simulated",
+                    "stopped by --timeout {} s at {:.1} s simulated",
                     timeout_s.unwrap_or_default(),
                     report.sim_time_s
                 )),
