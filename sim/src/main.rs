@@ -56,6 +56,8 @@ enum Command {
     /// Write a realistic generated room (flat, office, warehouse, pillars, irregular) as a
     /// scenario file; the same style and seed always give the same file.
     Generate(sim::generate::GenerateArgs),
+    /// Run many rooms × seeds on every core (or one shard of them), or merge shard folders.
+    Sweep(sim::sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -82,6 +84,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench_cmd(&args),
         Command::Check { scenarios } => check(&scenarios),
         Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
+        Command::Sweep(args) => args.run().map_err(anyhow::Error::from),
     };
     match result {
         Ok(code) => code,

@@ -1,0 +1,363 @@
+//! The sweep folder: `results.jsonl`, `summary.md`, `junit.xml` and `sweep.json`.
+//!
+//! `summary.md` and `junit.xml` are computed from the `results.jsonl` lines alone (parsed back),
+//! so a one-machine sweep and a merge of its shards, which hold the same lines, write the same
+//! bytes. Neither file holds a wall-clock figure.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::SweepError;
+use super::exec::Verdict;
+use super::plan::{Manifest, group_of, rerun_command};
+
+/// Most runs listed by name in `summary.md`'s failure tables.
+const MAX_LISTED: usize = 50;
+
+/// The fields of a `results.jsonl` line that the summary and junit.xml use.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct RunRecord {
+    /// Place in the run list.
+    pub index: usize,
+    /// Room id: path as given, or `gen:STYLE:SEED`.
+    pub room: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// Run seed.
+    pub seed: u64,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// Why a run did not pass.
+    #[serde(default)]
+    pub reason: Option<String>,
+    /// Coverage of reachable cells (absent when the run produced no report).
+    #[serde(default)]
+    pub coverage: Option<f64>,
+    /// Map accuracy.
+    #[serde(default)]
+    pub map_accuracy: Option<f64>,
+    /// Collisions.
+    #[serde(default)]
+    pub collisions: Option<u32>,
+    /// Each expectation's verdict.
+    #[serde(default)]
+    pub checks: Vec<CheckRecord>,
+}
+
+/// One expectation of a run, as `report.json` has it.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct CheckRecord {
+    /// Expectation name.
+    pub name: String,
+    /// What was asked for.
+    pub expected: String,
+    /// What the run achieved.
+    pub actual: String,
+    /// Whether it holds.
+    pub pass: bool,
+}
+
+impl RunRecord {
+    /// Parses one `results.jsonl` line; `origin` names it in errors.
+    pub fn parse(line: &str, origin: &str) -> Result<RunRecord, SweepError> {
+        serde_json::from_str(line)
+            .map_err(|e| SweepError::Input(format!("{origin}: not a sweep result: {e}")))
+    }
+
+    fn failed_checks(&self) -> usize {
+        self.checks.iter().filter(|c| !c.pass).count()
+    }
+
+    fn room_label(&self) -> String {
+        match self.room.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+            Some((_, room_seed)) => format!("room {room_seed} seed {}", self.seed),
+            None => format!("seed {}", self.seed),
+        }
+    }
+}
+
+/// What a sweep folder says: runs and passes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Totals {
+    /// Runs in the folder.
+    pub runs: usize,
+    /// Runs that passed.
+    pub passed: usize,
+}
+
+/// Writes the folder from `lines` (sorted by index, no newlines).
+pub fn write_folder(out: &Path, manifest: &Manifest, lines: &[String]) -> Result<Totals, SweepError> {
+    let records = lines
+        .iter()
+        .enumerate()
+        .map(|(i, l)| RunRecord::parse(l, &format!("result {}", i + 1)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let io = |path: &Path, e: std::io::Error| SweepError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(out).map_err(|e| io(out, e))?;
+    let mut jsonl = String::new();
+    for l in lines {
+        jsonl.push_str(l);
+        jsonl.push('\n');
+    }
+    let manifest_text = serde_json::to_string_pretty(manifest).unwrap_or_default() + "\n";
+    for (name, text) in [
+        ("results.jsonl", jsonl),
+        ("sweep.json", manifest_text),
+        ("summary.md", summary(manifest, &records)),
+        ("junit.xml", junit(&records)),
+    ] {
+        let path = out.join(name);
+        std::fs::write(&path, text).map_err(|e| io(&path, e))?;
+    }
+    Ok(Totals { runs: records.len(), passed: records.iter().filter(|r| r.verdict.passed()).count() })
+}
+
+/// `1..10` for consecutive seeds, commas otherwise.
+fn seeds_text(seeds: &[u64]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < seeds.len() {
+        let mut j = i;
+        while j + 1 < seeds.len() && seeds[j + 1] == seeds[j] + 1 {
+            j += 1;
+        }
+        parts.push(if j > i { format!("{}..{}", seeds[i], seeds[j]) } else { seeds[i].to_string() });
+        i = j + 1;
+    }
+    parts.join(",")
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map_or("-".into(), |v| format!("{:.1}%", v * 100.0))
+}
+
+fn cell(text: &str) -> String {
+    text.replace('|', "\\|").replace('\n', " ")
+}
+
+/// Runs grouped by scenario file or generated style, in run-list order of first appearance.
+fn groups(records: &[RunRecord]) -> Vec<(String, Vec<&RunRecord>)> {
+    let mut order: Vec<String> = Vec::new();
+    let mut by: BTreeMap<String, Vec<&RunRecord>> = BTreeMap::new();
+    for r in records {
+        let g = group_of(&r.room);
+        if !by.contains_key(&g) {
+            order.push(g.clone());
+        }
+        by.entry(g).or_default().push(r);
+    }
+    order
+        .into_iter()
+        .map(|g| {
+            let runs = by.remove(&g).unwrap_or_default();
+            (g, runs)
+        })
+        .collect()
+}
+
+/// `summary.md`: the verdict, the pass rate per scenario or style, the worst runs, and the
+/// commands that re-run the failures.
+pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
+    let passed = records.iter().filter(|r| r.verdict.passed()).count();
+    let mut s = String::new();
+    let _ = writeln!(s, "# Sweep: {passed} of {} runs pass\n", records.len());
+    let seeds = manifest
+        .seeds
+        .as_ref()
+        .map_or("each room's own seed".into(), |x| format!("seeds {}", seeds_text(&x.0)));
+    let _ = writeln!(s, "{} rooms × {seeds}: {} runs.", manifest.rooms.len(), manifest.runs);
+    if records.len() != manifest.runs {
+        let _ = writeln!(s, "This folder holds {} of them (one shard).", records.len());
+    }
+    let _ = writeln!(s, "\n## Pass rate per scenario or style\n");
+    let _ = writeln!(
+        s,
+        "| scenario or style | runs | pass | pass rate | min coverage | min accuracy | max collisions | failing |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---|");
+    for (group, runs) in groups(records) {
+        let ok = runs.iter().filter(|r| r.verdict.passed()).count();
+        let min = |f: fn(&RunRecord) -> Option<f64>| runs.iter().filter_map(|r| f(r)).reduce(f64::min);
+        let max_collisions = runs.iter().filter_map(|r| r.collisions).max();
+        let failing: Vec<String> =
+            runs.iter().filter(|r| !r.verdict.passed()).map(|r| r.room_label()).collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {ok} | {:.1}% | {} | {} | {} | {} |",
+            cell(&group),
+            runs.len(),
+            100.0 * ok as f64 / runs.len().max(1) as f64,
+            pct(min(|r| r.coverage)),
+            pct(min(|r| r.map_accuracy)),
+            max_collisions.map_or("-".into(), |c| c.to_string()),
+            failing.join(", ")
+        );
+    }
+    let mut worst: Vec<&RunRecord> = records.iter().filter(|r| !r.verdict.passed()).collect();
+    worst.sort_by(|a, b| {
+        (a.verdict, std::cmp::Reverse(a.failed_checks()))
+            .cmp(&(b.verdict, std::cmp::Reverse(b.failed_checks())))
+            .then(a.coverage.unwrap_or(0.0).total_cmp(&b.coverage.unwrap_or(0.0)))
+            .then(b.collisions.cmp(&a.collisions))
+            .then(a.index.cmp(&b.index))
+    });
+    if worst.is_empty() {
+        let _ = writeln!(s, "\nEvery run passes.");
+        return s;
+    }
+    let _ = writeln!(s, "\n## Failing runs, worst first\n");
+    let _ = writeln!(
+        s,
+        "Panics, setup errors and timeouts first, then by failed expectations, coverage, collisions.\n"
+    );
+    let _ = writeln!(s, "| run | scenario | seed | verdict | coverage | accuracy | collisions | why |");
+    let _ = writeln!(s, "|---:|---|---:|---|---:|---:|---:|---|");
+    for r in worst.iter().take(MAX_LISTED) {
+        let verdict = serde_json::to_value(r.verdict)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {verdict} | {} | {} | {} | {} |",
+            r.index,
+            cell(&r.room),
+            r.seed,
+            pct(r.coverage),
+            pct(r.map_accuracy),
+            r.collisions.map_or("-".into(), |c| c.to_string()),
+            cell(r.reason.as_deref().unwrap_or(""))
+        );
+    }
+    if worst.len() > MAX_LISTED {
+        let _ = writeln!(s, "\n…and {} more in results.jsonl.", worst.len() - MAX_LISTED);
+    }
+    let _ = writeln!(s, "\n## Re-run a failure\n\n```sh");
+    for r in worst.iter().take(MAX_LISTED) {
+        let _ = writeln!(s, "{}", rerun_command(&r.room, r.seed));
+    }
+    let _ = writeln!(s, "```");
+    s
+}
+
+fn xml(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c if (c as u32) < 0x20 && !matches!(c, '\n' | '\t') => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// `junit.xml`: one test suite per scenario or style, one test case per run; `fail` and
+/// `timeout` are failures, `panic` and `error` are errors. No times.
+pub fn junit(records: &[RunRecord]) -> String {
+    let count = |rs: &[&RunRecord], f: fn(Verdict) -> bool| rs.iter().filter(|r| f(r.verdict)).count();
+    let is_failure = |v| matches!(v, Verdict::Fail | Verdict::Timeout);
+    let is_error = |v| matches!(v, Verdict::Panic | Verdict::Error);
+    let all: Vec<&RunRecord> = records.iter().collect();
+    let mut s = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    let _ = writeln!(
+        s,
+        "<testsuites name=\"explobot sweep\" tests=\"{}\" failures=\"{}\" errors=\"{}\">",
+        all.len(),
+        count(&all, is_failure),
+        count(&all, is_error)
+    );
+    for (group, runs) in groups(records) {
+        let _ = writeln!(
+            s,
+            "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\">",
+            xml(&group),
+            runs.len(),
+            count(&runs, is_failure),
+            count(&runs, is_error)
+        );
+        for r in runs {
+            let name = format!("{} {}", r.room, r.room_label());
+            let open = format!("    <testcase classname=\"{}\" name=\"{}\"", xml(&r.scenario), xml(&name));
+            let reason = xml(r.reason.as_deref().unwrap_or(""));
+            let kind = if is_error(r.verdict) { "error" } else { "failure" };
+            if r.verdict.passed() {
+                let _ = writeln!(s, "{open}/>");
+            } else {
+                let _ = writeln!(s, "{open}>");
+                let _ = writeln!(
+                    s,
+                    "      <{kind} message=\"{reason}\" type=\"{:?}\">{}</{kind}>",
+                    r.verdict,
+                    xml(&rerun_command(&r.room, r.seed))
+                );
+                let _ = writeln!(s, "    </testcase>");
+            }
+        }
+        let _ = writeln!(s, "  </testsuite>");
+    }
+    s.push_str("</testsuites>\n");
+    s
+}
+
+/// A `results.jsonl` line without its wall-clock figures (the `wall` object, always last).
+pub fn without_wall(line: &str) -> &str {
+    line.rfind(",\"wall\":").map_or(line, |at| &line[..at])
+}
+
+/// Checks that two sweep folders hold the same results: `summary.md`, `junit.xml` and
+/// `sweep.json` byte for byte, `results.jsonl` line for line apart from the `wall` objects.
+/// The error names the first file and line that differ.
+pub fn compare_folders(a: &Path, b: &Path) -> Result<(), String> {
+    let read = |dir: &Path, name: &str| {
+        std::fs::read_to_string(dir.join(name)).map_err(|e| format!("{}: {e}", dir.join(name).display()))
+    };
+    for name in ["summary.md", "junit.xml", "sweep.json"] {
+        if read(a, name)? != read(b, name)? {
+            return Err(format!("{name} differs between {} and {}", a.display(), b.display()));
+        }
+    }
+    let (la, lb) = (read(a, "results.jsonl")?, read(b, "results.jsonl")?);
+    let (la, lb): (Vec<&str>, Vec<&str>) = (la.lines().collect(), lb.lines().collect());
+    if la.len() != lb.len() {
+        return Err(format!("results.jsonl: {} lines against {}", la.len(), lb.len()));
+    }
+    match la.iter().zip(&lb).position(|(x, y)| without_wall(x) != without_wall(y)) {
+        Some(i) => Err(format!("results.jsonl line {} differs:\n{}\n{}", i + 1, la[i], lb[i])),
+        None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn consecutive_seeds_read_as_ranges() {
+        assert_eq!(seeds_text(&[1, 2, 3, 5, 7, 8]), "1..3,5,7..8");
+        assert_eq!(seeds_text(&[4]), "4");
+    }
+
+    #[test]
+    fn the_wall_object_is_cut_off() {
+        assert_eq!(
+            without_wall(r#"{"index":0,"reason":"x","wall":{"total_s":1.0}}"#),
+            r#"{"index":0,"reason":"x""#
+        );
+    }
+
+    #[test]
+    fn xml_text_is_escaped() {
+        assert_eq!(xml("a <= 0 & \"b\"\u{1}"), "a &lt;= 0 &amp; &quot;b&quot; ");
+    }
+}
