@@ -124,7 +124,7 @@ fn grid_dir() -> PathBuf {
     if let Ok(dir) = std::env::var("CUTE_BENCH_GRIDS") {
         return PathBuf::from(dir);
     }
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/bench/grids")
+    std::env::current_dir().unwrap_or_default().join("../../shared/bench/grids")
 }
 
 fn main() -> ExitCode {

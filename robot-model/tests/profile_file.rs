@@ -2,7 +2,9 @@
 
 use robot_model::profile::{ProfileError, RobotProfile};
 
-const SHIPPED: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenarios/robots/mecanum-4wd.ron");
+/// Relative to the package root, the working directory of `cargo test` (a path baked in at compile
+/// time would go stale when two checkouts share one target directory).
+const SHIPPED: &str = "../scenarios/robots/mecanum-4wd.ron";
 
 #[test]
 fn shipped_profile_loads_and_equals_default() {

@@ -10,7 +10,7 @@ fn explobot() -> Command {
     let path: PathBuf = exe.parent().and_then(Path::parent).unwrap().join("explobot");
     assert!(path.exists(), "{} missing: cargo test --workspace builds it", path.display());
     let mut c = Command::new(path);
-    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
+    c.current_dir(Path::new(".."));
     c
 }
 

@@ -9,7 +9,7 @@ use sim::generate::{RoomStyle, generate};
 use sim::scenario::LoadedScenario;
 
 fn example(style: RoomStyle) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../scenarios/generated/{}-1.ron", style.name()))
+    Path::new("..").join(format!("scenarios/generated/{}-1.ron", style.name()))
 }
 
 #[test]

@@ -129,7 +129,7 @@ fn start_twin_and_carto(root: &Path, run_dir: &Path) -> (Guard, Guard, mpsc::Rec
 }
 
 fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    std::env::current_dir().unwrap().parent().unwrap().to_path_buf()
 }
 
 #[test]

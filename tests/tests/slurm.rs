@@ -23,7 +23,7 @@ use sim::sweep::output::compare_folders;
 const LIMIT: Duration = Duration::from_secs(120);
 
 fn repo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    std::env::current_dir().unwrap().parent().unwrap().to_path_buf()
 }
 
 fn explobot_path() -> PathBuf {

@@ -13,7 +13,7 @@ fn explobot() -> Command {
     let path: PathBuf = exe.parent().and_then(Path::parent).unwrap().join("explobot");
     assert!(path.exists(), "{} missing: cargo build --release -p sim --bin explobot", path.display());
     let mut c = Command::new(path);
-    c.current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap());
+    c.current_dir(Path::new(".."));
     for var in ["EXPLOBOT_SHARD", "SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"] {
         c.env_remove(var);
     }
@@ -94,7 +94,7 @@ fn jobs_and_shards_do_not_change_the_results() {
 fn a_failing_run_exits_1_and_names_its_rerun_command() {
     let dir = temp("fail");
     // empty.ron with a finish limit no run can meet.
-    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
     let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
     let robot = scenarios.join("robots/mecanum-4wd.ron").display().to_string();
     let text = text
