@@ -11,6 +11,7 @@ pub mod mapimg;
 pub mod mission;
 pub mod output;
 pub mod pacing;
+pub mod picture;
 pub mod plugin;
 pub mod raster;
 pub mod record;
@@ -21,6 +22,7 @@ pub mod scenario;
 pub mod serve;
 pub mod sweep;
 pub mod truth;
+pub mod truthimg;
 pub mod twin;
 #[cfg(feature = "window")]
 pub mod window;

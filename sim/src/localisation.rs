@@ -23,9 +23,25 @@
 //! assert!((l.heading_error_max_deg - 2.0).abs() < 1e-4);
 //! ```
 
-use robot_model::grid::{GridFrame, Heading};
+use carto::odometry::CellOffset;
+use robot_model::grid::{GridFrame, GridPose, Heading};
 use robot_model::pose::Pose2;
 use serde::Serialize;
+
+/// Where Carto believes the robot is, world metres: the centre of the cell Carto stores, plus its
+/// dead-reckoned offset from that centre (`along_m` ahead of the stored heading, `left_m` to its
+/// left). `map.png` draws these points as the believed trail. `None` when the stored cell is off
+/// the grid.
+pub fn carto_belief(frame: &GridFrame, pose: GridPose, offset: CellOffset) -> Option<(f32, f32)> {
+    let (row, col) = (usize::from(pose.x), usize::from(pose.y));
+    if row >= frame.rows || col >= frame.cols {
+        return None;
+    }
+    let (cx, cy) = frame.cell_center(row, col);
+    let (sin, cos) = pose.heading.world_angle().sin_cos();
+    let (along, left) = (offset.along_m as f32, offset.left_m as f32);
+    Some((cx + along * cos - left * sin, cy + along * sin + left * cos))
+}
 
 /// The largest gaps between Cute's belief and the truth seen so far.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -70,6 +86,21 @@ fn angle_between(a: f32, b: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn carto_belief_is_the_cell_centre_plus_the_offset_in_the_stored_heading() {
+        let frame = GridFrame::for_bounds((0.0, 0.0), (1.2, 0.9), 0.3);
+        let (x, y) = frame.cell_center(1, 2);
+        let offset = CellOffset { along_m: 0.10, left_m: 0.02 };
+        let north = GridPose { x: 1, y: 2, heading: Heading::North };
+        let (bx, by) = carto_belief(&frame, north, offset).unwrap_or_default();
+        // Facing north, ahead is +y and left is −x.
+        assert!((bx - (x - 0.02)).abs() < 1e-5 && (by - (y + 0.10)).abs() < 1e-5, "{bx} {by}");
+        let east = GridPose { heading: Heading::East, ..north };
+        let (bx, by) = carto_belief(&frame, east, offset).unwrap_or_default();
+        assert!((bx - (x + 0.10)).abs() < 1e-5 && (by - (y + 0.02)).abs() < 1e-5, "{bx} {by}");
+        assert_eq!(carto_belief(&frame, GridPose { x: 3, ..north }, offset), None);
+    }
 
     #[test]
     fn the_largest_errors_are_kept_with_their_time() {

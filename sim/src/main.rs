@@ -58,6 +58,9 @@ enum Command {
     Generate(sim::generate::GenerateArgs),
     /// Run many rooms × seeds on every core (or one shard of them), or merge shard folders.
     Sweep(sim::sweep::SweepArgs),
+    /// Print what the robot can really do in a room (free, reachable, turnable cells, blocked
+    /// moves: what runs are scored against) and draw it as runs/NAME/truth.png.
+    Truth(sim::truthimg::TruthArgs),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +88,7 @@ fn main() -> ExitCode {
         Command::Check { scenarios } => check(&scenarios),
         Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
         Command::Sweep(args) => args.run().map_err(anyhow::Error::from),
+        Command::Truth(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
     };
     match result {
         Ok(code) => code,

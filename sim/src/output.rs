@@ -127,7 +127,7 @@ pub fn default_out_dir(scenario_name: &str) -> PathBuf {
     Path::new("runs").join(scenario_name)
 }
 
-/// Cute's map over the true room, the trail and the final pose.
+/// Cute's map over the true room, the true and the believed trail, the final pose and a legend.
 pub fn map_picture(run: &Lockstep, known: &[Option<bool>]) -> image::RgbImage {
     let pose = run.body().pose();
     let geometry = &run.loaded().profile.geometry;
@@ -136,6 +136,7 @@ pub fn map_picture(run: &Lockstep, known: &[Option<bool>]) -> image::RgbImage {
         frame: run.frame(),
         known,
         trail: run.trail(),
+        believed_trail: run.believed_trail(),
         pose: (pose.x, pose.y, pose.theta),
         body: (geometry.body_length_m, geometry.body_width_m),
     }

@@ -25,7 +25,7 @@ use transport::{
 
 use crate::body::RobotBody;
 use crate::grid::GridFrame;
-use crate::localisation::Localisation;
+use crate::localisation::{Localisation, carto_belief};
 use crate::mission::Operator;
 use crate::record::{EndpointLog, hash_logs};
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
@@ -123,6 +123,8 @@ pub struct Lockstep {
     /// The link-log hash, computed once the run is over (the logs no longer change then).
     final_hash: std::sync::OnceLock<String>,
     localisation: Localisation,
+    /// Where Carto believed the robot was, sampled whenever the twin adds a trail point.
+    believed_trail: Vec<(f32, f32)>,
     settled_at: Option<Instant>,
 }
 
@@ -201,6 +203,7 @@ impl Lockstep {
             logs: Vec::new(),
             final_hash: std::sync::OnceLock::new(),
             localisation: Localisation::default(),
+            believed_trail: Vec::new(),
             settled_at: None,
             loaded,
         })
@@ -248,7 +251,16 @@ impl Lockstep {
         }
 
         // 5. Physics.
+        let trail_points = self.twin.trail().len();
         self.twin.physics_step(now);
+        if self.twin.trail().len() != trail_points {
+            let carto = self.carto.carto().status();
+            if let Some(point) =
+                carto.pose.and_then(|pose| carto_belief(&self.truth.frame, pose, carto.cell_offset))
+            {
+                self.believed_trail.push(point);
+            }
+        }
         if move_ended || self.is_finished() {
             let (x, y, heading) = self.cute.cute().robot();
             self.localisation.sample(
@@ -369,6 +381,12 @@ impl Lockstep {
     /// The robot's trail (world metres).
     pub fn trail(&self) -> &[(f32, f32)] {
         self.twin.trail()
+    }
+
+    /// Where Carto believed the robot was, at the moments of [`Lockstep::trail`] once Carto
+    /// knew its cell (world metres; see [`crate::localisation::carto_belief`]).
+    pub fn believed_trail(&self) -> &[(f32, f32)] {
+        &self.believed_trail
     }
 
     /// The scenario being run.

@@ -1,0 +1,239 @@
+//! `explobot truth SCENARIO`: what the robot can really do in a room, as the runs score it
+//! ([`crate::truth::RobotTruth`]), printed as counts and drawn as `truth.png`.
+//!
+//! The picture shows the true room (as `map.png` does), each cell tinted by the truth — green
+//! reachable from the start, yellow free but not reachable (a closed pocket), red the robot
+//! cannot stand there —, a dark dot on free cells where the robot cannot turn on the spot, a
+//! magenta bar on the line between two free cells whose move is blocked (a thin wall between
+//! them), and the start cell framed in blue. A legend under the picture repeats this.
+//!
+//! ```
+//! let loaded = sim::scenario::LoadedScenario::builtin_default()?;
+//! let counts = sim::truthimg::TruthCounts::of(&loaded);
+//! assert_eq!(counts.reachable, 67); // the default room: the coverage denominator of its report
+//! let png = sim::truthimg::truth_picture(&loaded);
+//! assert!(png.width() > 100);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::path::PathBuf;
+
+use image::RgbImage;
+use serde::Serialize;
+
+use crate::mapimg::{PALETTE, room_canvas};
+use crate::picture::{LegendEntry, Swatch, blend, fill, line, with_legend};
+use crate::scenario::{LoadedScenario, ScenarioError};
+
+const REACHABLE: ([u8; 3], f32) = ([60, 200, 90], 0.35);
+const POCKET: ([u8; 3], f32) = ([240, 200, 40], 0.5);
+const NOT_FREE: ([u8; 3], f32) = ([230, 40, 40], 0.45);
+const NO_TURN: [u8; 3] = [60, 60, 60];
+const BLOCKED_MOVE: [u8; 3] = [220, 0, 200];
+const START: [u8; 3] = [30, 80, 230];
+
+/// What the colours of `truth.png` mean.
+pub const LEGEND: [LegendEntry; 8] = [
+    LegendEntry::new(Swatch::Fill(PALETTE.obstacle), "wall/obstacle"),
+    LegendEntry::new(Swatch::Fill(PALETTE.outside), "outside the room"),
+    LegendEntry::new(
+        Swatch::Tint { base: PALETTE.floor, tint: REACHABLE.0, alpha: REACHABLE.1 },
+        "reachable",
+    ),
+    LegendEntry::new(
+        Swatch::Tint { base: PALETTE.floor, tint: POCKET.0, alpha: POCKET.1 },
+        "free, not reachable",
+    ),
+    LegendEntry::new(
+        Swatch::Tint { base: PALETTE.floor, tint: NOT_FREE.0, alpha: NOT_FREE.1 },
+        "robot does not fit",
+    ),
+    LegendEntry::new(Swatch::Fill(NO_TURN), "dot: cannot turn there"),
+    LegendEntry::new(Swatch::Line(BLOCKED_MOVE), "move blocked"),
+    LegendEntry::new(Swatch::Line(START), "start cell"),
+];
+
+/// The truth of a room in numbers.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct TruthCounts {
+    /// Grid rows and columns.
+    pub rows: usize,
+    /// Grid columns.
+    pub cols: usize,
+    /// Cells where the robot can stand.
+    pub free: usize,
+    /// Free cells connected to the start by moves: what coverage counts.
+    pub reachable: usize,
+    /// Reachable cells where the robot can also turn on the spot.
+    pub reachable_turnable: usize,
+    /// Moves between two free neighbours that the body's sweep blocks.
+    pub blocked_moves: usize,
+}
+
+impl TruthCounts {
+    /// Counts the truth of `loaded` from its start cell.
+    pub fn of(loaded: &LoadedScenario) -> TruthCounts {
+        let t = loaded.truth();
+        let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
+        let reachable = t.reachable_from(start);
+        let cells = || (0..t.rows).flat_map(|r| (0..t.cols).map(move |c| (r, c)));
+        let mut blocked_moves = 0;
+        for (r, c) in cells() {
+            for next in [(r, c + 1), (r + 1, c)] {
+                if t.is_free(r, c) && t.is_free(next.0, next.1) && !t.can_move((r, c), next) {
+                    blocked_moves += 1;
+                }
+            }
+        }
+        TruthCounts {
+            rows: t.rows,
+            cols: t.cols,
+            free: cells().filter(|&(r, c)| t.is_free(r, c)).count(),
+            reachable: reachable.iter().filter(|&&x| x).count(),
+            reachable_turnable: cells()
+                .filter(|&(r, c)| reachable[r * t.cols + c] && t.can_turn(r, c))
+                .count(),
+            blocked_moves,
+        }
+    }
+}
+
+/// Draws `truth.png` for `loaded` (see the module docs).
+pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
+    let t = loaded.truth();
+    let frame = t.frame;
+    let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
+    let reachable = t.reachable_from(start);
+    let (mut img, grid) = room_canvas(&loaded.scenario, &frame, |row, col, c| {
+        let (tint, alpha) = if reachable.get(row * frame.cols + col).copied().unwrap_or(false) {
+            REACHABLE
+        } else if t.is_free(row, col) {
+            POCKET
+        } else {
+            NOT_FREE
+        };
+        blend(c, tint, alpha)
+    });
+    let to_px = |x: f32, y: f32| grid.to_px(x, y);
+    let dot = (grid.scale * 0.03).max(2.0) as u32;
+    for row in 0..t.rows {
+        for col in 0..t.cols {
+            let (x, y) = frame.cell_center(row, col);
+            if t.is_free(row, col) && !t.can_turn(row, col) {
+                let (px, py) = to_px(x, y);
+                let (px, py) = (px.max(0.0) as u32, py.max(0.0) as u32);
+                fill(
+                    &mut img,
+                    (px.saturating_sub(dot / 2), py.saturating_sub(dot / 2)),
+                    (px + dot / 2 + 1, py + dot / 2 + 1),
+                    NO_TURN,
+                );
+            }
+            // The shared edge of (row, col) and its east / south neighbour.
+            let half = frame.cell / 2.0;
+            let edges = [
+                ((row, col + 1), (x + half, y + half), (x + half, y - half)),
+                ((row + 1, col), (x - half, y - half), (x + half, y - half)),
+            ];
+            for (next, a, b) in edges {
+                if t.is_free(row, col) && t.is_free(next.0, next.1) && !t.can_move((row, col), next) {
+                    thick_line(&mut img, to_px(a.0, a.1), to_px(b.0, b.1), BLOCKED_MOVE);
+                }
+            }
+        }
+    }
+    let (x, y) = frame.cell_center(start.0, start.1);
+    let h = frame.cell / 2.0 - 0.01;
+    let corners = [(x - h, y - h), (x + h, y - h), (x + h, y + h), (x - h, y + h)];
+    for i in 0..4 {
+        let (a, b) = (corners[i], corners[(i + 1) % 4]);
+        thick_line(&mut img, to_px(a.0, a.1), to_px(b.0, b.1), START);
+    }
+    with_legend(img, &LEGEND)
+}
+
+/// A 4-pixel line.
+fn thick_line(img: &mut RgbImage, a: (f32, f32), b: (f32, f32), color: [u8; 3]) {
+    for (ox, oy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+        line(img, (a.0 + ox, a.1 + oy), (b.0 + ox, b.1 + oy), color);
+    }
+}
+
+/// Arguments of `explobot truth`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TruthArgs {
+    /// Scenario file (default: the built-in default room).
+    pub scenario: Option<PathBuf>,
+    /// Where to write the picture (default: runs/NAME/truth.png).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Why `explobot truth` failed.
+#[derive(Debug, thiserror::Error)]
+pub enum TruthError {
+    /// The scenario could not be loaded.
+    #[error(transparent)]
+    Scenario(#[from] ScenarioError),
+    /// The picture could not be written.
+    #[error("writing {path}: {message}")]
+    Write {
+        /// Where.
+        path: PathBuf,
+        /// Why.
+        message: String,
+    },
+}
+
+impl TruthArgs {
+    /// Prints the counts and writes the picture.
+    pub fn run(&self) -> Result<(), TruthError> {
+        let loaded = LoadedScenario::load_or_default(self.scenario.as_deref())?;
+        let c = TruthCounts::of(&loaded);
+        println!("{}: {} × {} cells of {:.2} m", loaded.label, c.rows, c.cols, loaded.truth().frame.cell);
+        println!("  free (the robot fits)        {}", c.free);
+        println!("  reachable from the start     {}  (what coverage counts)", c.reachable);
+        println!("  reachable, turn on the spot  {}", c.reachable_turnable);
+        println!("  free but not reachable       {}", c.free - c.reachable);
+        println!("  moves blocked between free   {}", c.blocked_moves);
+        let path = self
+            .out
+            .clone()
+            .unwrap_or_else(|| crate::output::default_out_dir(&loaded.scenario.name).join("truth.png"));
+        let write = |message: String| TruthError::Write { path: path.clone(), message };
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| write(e.to_string()))?;
+        }
+        truth_picture(&loaded).save(&path).map_err(|e| write(e.to_string()))?;
+        println!("wrote {}", path.display());
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+
+    /// The awkward cases of `sim/README.md`: a thin wall on a cell line, a leg on a cell corner and
+    /// a wall 2 cm into a row, counted and drawn.
+    #[test]
+    fn the_documented_cases_count_as_the_readme_says() {
+        let loaded = LoadedScenario::load(std::path::Path::new("docs/truth-cases.ron")).unwrap();
+        let c = TruthCounts::of(&loaded);
+        assert_eq!((c.rows, c.cols, c.free, c.reachable), (5, 8, 40, 40));
+        // 3 across the thin wall, 3 from row 3 towards the wall 2 cm into row 4.
+        assert_eq!(c.blocked_moves, 6);
+        // Only cells off the walls turn: the 3 × 6 interior, less the four beside the thin wall.
+        assert_eq!(c.reachable_turnable, 14);
+        let t = loaded.truth();
+        assert!(t.can_turn(1, 1) && t.can_turn(1, 2), "the leg on the corner leaves room to turn");
+        assert!(!t.can_move((3, 6), (4, 6)) && t.can_move((4, 5), (4, 6)));
+
+        let png = truth_picture(&loaded);
+        let blocked = png.pixels().filter(|p| p.0 == BLOCKED_MOVE).count();
+        assert!(blocked > 100, "blocked moves are drawn ({blocked} px)");
+        assert!(png.height() > png.width() * 5 / 8, "a legend is added under the room");
+    }
+}
