@@ -224,6 +224,9 @@ fn issue_14_compat_long_trajectories_go_in_complete_batches_of_at_most_50() {
         assert_eq!(frame[..4], [0x00, 0x04, 0x00, 0x01], "frame {i}");
         assert_eq!(usize::from(frame[4]), if i < 50 { 50 } else { total - 50 }, "frame {i}");
     }
+    // Once the path is cleared, only the start (left) and the robot's cell are known.
+    act(&mut rt, &mut carto, 20, |c| c.go_to(2, 69).unwrap());
+    assert_eq!(rt.cute().map().count(CellValue::Unknown), 3 * 70 - 2);
 }
 
 #[test]

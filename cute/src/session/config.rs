@@ -53,7 +53,7 @@ pub enum Compat {
     #[value(name = "default", alias = "none")]
     Default,
     /// The original 2024 Carto: little-endian `Msg`, trajectories only, batches ≤ 50, clicks
-    /// planned through unknown cells, the batch after a STOP dropped (module docs).
+    /// planned through unknown cells, the batch after a STOP dropped.
     #[value(name = "explobot-2024")]
     Explobot2024,
 }

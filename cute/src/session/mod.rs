@@ -468,8 +468,9 @@ impl Cute {
                 } else {
                     for batch in &all {
                         self.send_batch(batch);
-                        self.belief.assume_driven(batch);
                     }
+                    // One move of the marker: cells between batches were not seen either.
+                    self.belief.assume_driven(&all.concat());
                     let commands = all.iter().map(Vec::len).sum();
                     self.events.push(CuteEvent::TrajectorySent { commands });
                 }
