@@ -22,7 +22,7 @@
 //! ```
 
 use crate::cartography::MoveResult;
-use crate::map::{MAX_SIDE, MapError};
+use crate::map::{MAX_SIDE, MapError, TextProblem};
 use robot_model::grid::{Heading, Move};
 
 /// The true room: `rows × cols` cells, each free or blocked.
@@ -34,7 +34,8 @@ pub struct World {
 }
 
 impl World {
-    /// Parses `.` (free) and `#` (blocked) lines; blank lines are skipped.
+    /// Parses `.` (free) and `#` (blocked) lines; blank lines are skipped. Error columns count
+    /// from the first non-blank character of the line.
     pub fn parse(text: &str) -> Result<World, MapError> {
         let mut blocked = Vec::new();
         let (mut rows, mut cols) = (0, 0);
@@ -44,12 +45,13 @@ impl World {
                 continue;
             }
             let before = blocked.len();
-            for ch in line.chars() {
+            for (i, ch) in line.chars().enumerate() {
                 match ch {
                     '.' => blocked.push(false),
                     '#' => blocked.push(true),
                     other => {
-                        return Err(MapError::BadChar { line: n + 1, found: other });
+                        let problem = TextProblem::BadChar { found: other };
+                        return Err(MapError::text(n + 1, i + 1, problem));
                     }
                 }
             }
@@ -57,7 +59,8 @@ impl World {
             if rows == 0 {
                 cols = len;
             } else if len != cols {
-                return Err(MapError::RaggedRow { line: n + 1, got: len, expected: cols });
+                let problem = TextProblem::RaggedRow { got: len, expected: cols };
+                return Err(MapError::text(n + 1, len.min(cols) + 1, problem));
             }
             rows += 1;
         }

@@ -63,6 +63,8 @@ use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 /// The egui integration this GUI is built on, for plugins that add their own panels beside it.
 pub use bevy_egui;
 
+pub use crate::notices::{Popup, describe, popup_for};
+
 use crate::map::CellValue;
 use crate::session::{Compat, Cute, CuteEvent, Status};
 use crate::trajectory::PlanError;
@@ -199,62 +201,6 @@ pub const fn cell_rgb(value: CellValue) -> [u8; 3] {
     }
 }
 
-/// A message box the operator must acknowledge.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Popup {
-    /// Window title.
-    pub title: String,
-    /// Message.
-    pub text: String,
-}
-
-/// The pop-up an event deserves, if any: no path, connection lost, obstacle met, and the
-/// failures that end a mission.
-pub fn popup_for(event: &CuteEvent) -> Option<Popup> {
-    let (title, text) = match event {
-        CuteEvent::NoPath { x, y } => ("No path", format!("No path over known free cells to ({x}, {y}).")),
-        CuteEvent::ConnectionLost => {
-            ("Connection lost", "The connection to Carto was lost; reconnecting.".to_string())
-        }
-        CuteEvent::ObstacleMet { x, y } => {
-            ("Obstacle", format!("The robot met an obstacle at ({x}, {y}); the trajectory was aborted."))
-        }
-        CuteEvent::MoveTimeout { waiting_for } => {
-            ("Timeout", format!("Carto did not answer in time (waiting for {waiting_for:?})."))
-        }
-        CuteEvent::MoveRejected { command } => {
-            ("Move refused", format!("Carto keeps refusing {command}; cartography stopped."))
-        }
-        CuteEvent::ProtocolError { message, fatal: true } => {
-            ("Protocol error", format!("{message}; the connection was closed."))
-        }
-        _ => return None,
-    };
-    Some(Popup { title: title.to_string(), text })
-}
-
-/// One log line for an event.
-pub fn describe(event: &CuteEvent) -> String {
-    match event {
-        CuteEvent::Connected => "connected to Carto".to_string(),
-        CuteEvent::ConnectionLost => "connection lost".to_string(),
-        CuteEvent::PositionAcknowledged => "position acknowledged".to_string(),
-        CuteEvent::ObstacleMet { x, y } => format!("obstacle met at ({x}, {y})"),
-        CuteEvent::NoPath { x, y } => format!("no path to ({x}, {y})"),
-        CuteEvent::Reached { x, y } => format!("reached ({x}, {y})"),
-        CuteEvent::TrajectorySent { commands } => format!("trajectory of {commands} commands sent"),
-        CuteEvent::MappingDone { free, obstacles, unreachable, moves } => format!(
-            "mapping done: {free} free, {obstacles} obstacles, {unreachable} unreachable, {moves} moves"
-        ),
-        CuteEvent::MoveTimeout { waiting_for } => format!("timeout waiting for {waiting_for:?}"),
-        CuteEvent::MoveRejected { command } => format!("{command} refused"),
-        CuteEvent::Stopped => "stopped".to_string(),
-        CuteEvent::ProtocolError { message, fatal } => {
-            format!("protocol error{}: {message}", if *fatal { " (fatal)" } else { "" })
-        }
-    }
-}
-
 /// What the GUI shows besides the session: pop-ups waiting, the log, the last notice.
 #[derive(Resource, Debug, Default, Clone)]
 pub struct CuteUiState {
@@ -269,6 +215,9 @@ pub struct CuteUiState {
 impl CuteUiState {
     /// Records an event: a log line, and a pop-up unless the same one is already waiting.
     pub fn record(&mut self, event: &CuteEvent) {
+        if crate::notices::is_warning(event) {
+            self.notice = Some(describe(event));
+        }
         self.log.push_back(describe(event));
         while self.log.len() > LOG_LINES {
             self.log.pop_front();
@@ -593,10 +542,15 @@ fn status_text(cute: &Cute) -> String {
         Status::Moving => "moving",
         Status::Done => "map complete",
     };
+    let compat = match cute.config().compat {
+        Compat::Default => "",
+        Compat::Explobot2024 if cute.batch_drop_pending() => "compat 2024, next batch dropped | ",
+        Compat::Explobot2024 => "compat 2024, unknown cells planned as free | ",
+    };
     let (x, y, h) = cute.robot();
     let map = cute.map();
     format!(
-        "{link} | {status} | robot ({x}, {y}) facing {h} | free {} obstacles {} unknown {}",
+        "{compat}{link} | {status} | robot ({x}, {y}) facing {h} | free {} obstacles {} unknown {}",
         map.cells().iter().filter(|v| v.is_known_free()).count(),
         map.count(CellValue::Obstacle),
         map.count(CellValue::Unknown),
@@ -637,7 +591,11 @@ fn cute_toolbar<R: CuteAccess>(
                     session.cute_mut().reset_map();
                     ui_state.notice = Some("map reset".to_string());
                 }
-                ui.label("click a free cell to send the robot");
+                ui.label(if compat {
+                    "click a cell to send the robot"
+                } else {
+                    "click a free cell to send the robot"
+                });
             });
             ui.label(status_text(session.cute()));
             let last = ui_state.notice.clone().or_else(|| ui_state.log.back().cloned()).unwrap_or_default();
@@ -832,5 +790,11 @@ mod tests {
         let t = status_text(&cute);
         assert!(t.starts_with("disconnected | idle | robot (0, 0) facing"), "{t}");
         assert!(t.ends_with("free 1 obstacles 0 unknown 11"), "{t}");
+        let config = crate::session::CuteConfig { compat: Compat::Explobot2024, ..Default::default() };
+        let mut cute = Cute::new(config).unwrap();
+        assert!(status_text(&cute).starts_with("compat 2024, unknown cells planned as free | "));
+        cute.on_connected(robot_model::time::Instant::ZERO);
+        cute.stop();
+        assert!(status_text(&cute).starts_with("compat 2024, next batch dropped | "));
     }
 }

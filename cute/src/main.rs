@@ -29,21 +29,29 @@ struct Cli {
     /// Carto's address, HOST:PORT (e.g. 127.0.0.1:12345).
     #[arg(long, value_name = "HOST:PORT")]
     connect: String,
-    /// Which Carto is on the other end (`explobot-2024`: the original 2024 Carto).
+    /// Which Carto is on the other end. `explobot-2024`, the original 2024 Carto: little-endian
+    /// `Msg`, trajectories only (batches of at most 50, no answer expected), a click plans through
+    /// unknown cells as if free (with a warning), and after a STOP the original drops the next
+    /// batch, so Cute keeps the robot where it was and warns when it sends that batch.
     #[arg(long, value_enum, value_name = "MODE", default_value_t = Compat::Default)]
     compat: Compat,
+    /// A known map to start from: one line per row, one digit per cell (0 obstacle, 1 free,
+    /// 2 unknown, 3 waypoint, 4 destination, 5 robot), `#` comments; sets rows, columns and, if
+    /// it has a 5, the start cell.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["rows", "cols"])]
+    map: Option<PathBuf>,
     /// Map rows.
     #[arg(long, default_value_t = 20)]
     rows: usize,
     /// Map columns.
     #[arg(long, default_value_t = 20)]
     cols: usize,
-    /// The robot's starting row.
-    #[arg(long, default_value_t = 0)]
-    start_row: u8,
-    /// The robot's starting column.
-    #[arg(long, default_value_t = 0)]
-    start_col: u8,
+    /// The robot's starting row (default 0, or the row of the map's 5).
+    #[arg(long)]
+    start_row: Option<u8>,
+    /// The robot's starting column (default 0, or the column of the map's 5).
+    #[arg(long)]
+    start_col: Option<u8>,
     /// The robot's starting heading: north, south, east or west.
     #[arg(long, default_value = "east")]
     heading: Heading,
@@ -109,15 +117,23 @@ fn screenshot_when_due(remote: Res<Remote>, after: Res<ScreenshotAfter>, mut sho
 struct ScreenshotAfter(f64);
 
 fn run(cli: Cli) -> Result<ExitCode> {
-    let cute = Cute::new(CuteConfig {
+    let given = match (cli.start_row, cli.start_col) {
+        (None, None) => None,
+        (row, col) => Some((row.unwrap_or(0), col.unwrap_or(0))),
+    };
+    let mut config = CuteConfig {
         rows: cli.rows,
         cols: cli.cols,
-        start: (cli.start_row, cli.start_col),
+        start: given.unwrap_or((0, 0)),
         heading: cli.heading,
         compat: cli.compat,
         ..CuteConfig::default()
-    })
-    .context("bad map settings")?;
+    };
+    if let Some(path) = &cli.map {
+        let map = cute::load_map(path)?;
+        config = config.with_map(map, given).with_context(|| format!("{}", path.display()))?;
+    }
+    let cute = Cute::new(config).context("bad map settings")?;
     let connector = TcpConnector::new(cli.connect.clone()).timeout(CONNECT_TIMEOUT);
     let remote = Remote {
         runtime: CuteRuntime::new(cute, connector),

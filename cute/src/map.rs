@@ -121,32 +121,51 @@ pub enum MapError {
         /// The number.
         value: u8,
     },
-    /// A map text line has a character that is not a digit 0..=5.
-    #[error("line {line}: {found:?} is not a cell value (0..=5)")]
-    BadChar {
+    /// A map text is wrong at one place (1-based line and column, counted in characters of the
+    /// line as written).
+    #[error("line {line}, column {column}: {problem}")]
+    Text {
         /// 1-based line number in the text.
         line: usize,
+        /// 1-based column (characters) in that line.
+        column: usize,
+        /// What is wrong there.
+        problem: TextProblem,
+    },
+}
+
+/// What is wrong at one place of a map text ([`MapError::Text`]).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[non_exhaustive]
+pub enum TextProblem {
+    /// A character that is not a digit 0..=5 (nor a space, tab or comma).
+    #[error("{found:?} is not a cell value (0..=5)")]
+    BadChar {
         /// The offending character.
         found: char,
     },
-    /// A map text line has a different length from the first row.
-    #[error("line {line}: {got} cells, expected {expected}")]
+    /// A row with a different number of cells from the first row; the column is that of the
+    /// first extra cell, or just after the last one if the row is short.
+    #[error("{got} cells on this row, expected {expected} as on the first row")]
     RaggedRow {
-        /// 1-based line number in the text.
-        line: usize,
-        /// Cells on that line.
+        /// Cells on that row.
         got: usize,
         /// Cells on the first row.
         expected: usize,
     },
-    /// A map text holds more than one robot or destination cell.
-    #[error("line {line}: a second {what} cell")]
+    /// A second robot (5) or destination (4) cell.
+    #[error("a second {what} cell")]
     Duplicate {
-        /// 1-based line number in the text.
-        line: usize,
         /// "robot" or "destination".
         what: &'static str,
     },
+}
+
+impl MapError {
+    /// A [`MapError::Text`].
+    pub const fn text(line: usize, column: usize, problem: TextProblem) -> MapError {
+        MapError::Text { line, column, problem }
+    }
 }
 
 /// A `rows × cols` grid of cell values with the robot and destination markers.
@@ -331,8 +350,9 @@ impl Map {
         s
     }
 
-    /// Parses [`Map::to_text`]'s format. Blank lines and lines starting with `#` are skipped;
-    /// spaces and commas between digits are ignored. Errors name the 1-based line.
+    /// Parses [`Map::to_text`]'s format: one line per row, one digit 0..=5 per cell. Blank
+    /// lines and lines starting with `#` are skipped; spaces, tabs and commas between digits are
+    /// ignored. Errors name the 1-based line and column ([`MapError::Text`]).
     pub fn parse(text: &str) -> Result<Map, MapError> {
         let mut rows: Vec<Vec<CellValue>> = Vec::new();
         let mut robot = None;
@@ -345,27 +365,36 @@ impl Map {
                 continue;
             }
             let mut row = Vec::with_capacity(trimmed.len());
-            for ch in trimmed.chars() {
-                if ch == ' ' || ch == ',' {
+            let mut end_column = 1;
+            for (i, ch) in line.chars().enumerate() {
+                let column = i + 1;
+                if matches!(ch, ' ' | '\t' | ',') {
                     continue;
                 }
+                let at = |problem| MapError::text(line_no, column, problem);
                 let v = ch
                     .to_digit(10)
                     .and_then(|d| CellValue::from_u8(d as u8))
-                    .ok_or(MapError::BadChar { line: line_no, found: ch })?;
+                    .ok_or_else(|| at(TextProblem::BadChar { found: ch }))?;
+                if !rows.is_empty() && row.len() == first_len {
+                    let got = line.chars().filter(|c| !matches!(c, ' ' | '\t' | ',')).count();
+                    return Err(at(TextProblem::RaggedRow { got, expected: first_len }));
+                }
                 let here = (rows.len(), row.len());
                 if v == CellValue::Robot && robot.replace(here).is_some() {
-                    return Err(MapError::Duplicate { line: line_no, what: "robot" });
+                    return Err(at(TextProblem::Duplicate { what: "robot" }));
                 }
                 if v == CellValue::Destination && destination.replace(here).is_some() {
-                    return Err(MapError::Duplicate { line: line_no, what: "destination" });
+                    return Err(at(TextProblem::Duplicate { what: "destination" }));
                 }
                 row.push(v);
+                end_column = column + 1;
             }
             if rows.is_empty() {
                 first_len = row.len();
             } else if row.len() != first_len {
-                return Err(MapError::RaggedRow { line: line_no, got: row.len(), expected: first_len });
+                let problem = TextProblem::RaggedRow { got: row.len(), expected: first_len };
+                return Err(MapError::text(line_no, end_column, problem));
             }
             rows.push(row);
         }
@@ -469,9 +498,14 @@ mod tests {
         assert_eq!(map.destination(), Some((3, 3)));
         assert_eq!(map.to_text(), "5111\n0201\n0001\n0004\n");
         assert_eq!(Map::parse("1,1,1\n0 0 0\n").unwrap().cols(), 3);
-        assert_eq!(Map::parse("11\n1x\n"), Err(MapError::BadChar { line: 2, found: 'x' }));
-        assert_eq!(Map::parse("11\n111\n"), Err(MapError::RaggedRow { line: 2, got: 3, expected: 2 }));
-        assert_eq!(Map::parse("55\n"), Err(MapError::Duplicate { line: 1, what: "robot" }));
+        let err = |line, column, problem| Err(MapError::text(line, column, problem));
+        assert_eq!(Map::parse("11\n1x\n"), err(2, 2, TextProblem::BadChar { found: 'x' }));
+        assert_eq!(Map::parse("# c\n1, 1\n 1,\t7\n"), err(3, 5, TextProblem::BadChar { found: '7' }));
+        assert_eq!(Map::parse("11\n111\n"), err(2, 3, TextProblem::RaggedRow { got: 3, expected: 2 }));
+        assert_eq!(Map::parse("1 1 1\n1 1\n"), err(2, 4, TextProblem::RaggedRow { got: 2, expected: 3 }));
+        assert_eq!(Map::parse("15\n\n51\n"), err(3, 1, TextProblem::Duplicate { what: "robot" }));
+        let text = Map::parse("12\n3x\n").unwrap_err().to_string();
+        assert_eq!(text, "line 2, column 2: 'x' is not a cell value (0..=5)");
         assert!(matches!(Map::parse(""), Err(MapError::BadSize { .. })));
     }
 }

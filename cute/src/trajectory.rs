@@ -12,7 +12,11 @@
 //! [`PlanError::NoPath`]. The start heading is a parameter (the original always assumed EAST).
 //!
 //! Passable cells: free (1), waypoint (3), destination (4) and the robot's cell (5). Unknown (2)
-//! counts as an obstacle, as in the original. The destination must be a known free cell.
+//! counts as an obstacle, as in the original, and the destination must be a known free cell —
+//! unless the planner is built [`Planner::through_unknown`] (Cute's `--compat explobot-2024`: the
+//! original Carto cannot map, so its users send the robot across cells nobody has seen). Then
+//! unknown cells cost the same as free ones and may be the destination, so the paths are those of
+//! an all-free map (what the original Cute planned on its demo map).
 //!
 //! Invariants: `commands` contains exactly `path.len() - 1` FORWARDs, each preceded by at most two
 //! turns; replaying `commands` from the start pose ends on the destination, facing
@@ -145,6 +149,7 @@ pub struct Planner {
     astar: AStar,
     grid: Option<Grid>,
     tie_break: TieBreak,
+    through_unknown: bool,
 }
 
 impl Default for Planner {
@@ -156,7 +161,17 @@ impl Default for Planner {
 impl Planner {
     /// A planner using the original's `(f, row, col)` order ([`TieBreak::Reference`]).
     pub fn new() -> Planner {
-        Planner { astar: AStar::new(), grid: None, tie_break: TieBreak::Reference }
+        Planner { astar: AStar::new(), grid: None, tie_break: TieBreak::Reference, through_unknown: false }
+    }
+
+    /// The same planner, crossing (and ending on) unknown cells as if they were free when `yes`.
+    pub fn through_unknown(self, yes: bool) -> Planner {
+        Planner { through_unknown: yes, ..self }
+    }
+
+    /// True if unknown cells are planned as free ([`Planner::through_unknown`]).
+    pub fn plans_through_unknown(&self) -> bool {
+        self.through_unknown
     }
 
     /// A planner using the given A* open-list order.
@@ -181,15 +196,17 @@ impl Planner {
         if from == to {
             return Ok(Trajectory { path: vec![from], commands: Vec::new(), final_heading: heading });
         }
-        if !value.is_known_free() {
+        let unknown_ok = self.through_unknown && value == CellValue::Unknown;
+        if !value.is_known_free() && !unknown_ok {
             return Err(PlanError::DestinationNotFree { x: to.0, y: to.1, value });
         }
+        let unknown_cost = u8::from(self.through_unknown);
         let grid = match &mut self.grid {
             Some(g) if g.rows() == map.rows() && g.cols() == map.cols() => {
-                fill_grid(g, map, 0);
+                fill_grid(g, map, unknown_cost);
                 g
             }
-            slot => slot.insert(grid_from_map(map, 0)),
+            slot => slot.insert(grid_from_map(map, unknown_cost)),
         };
         let path = self
             .astar
@@ -352,6 +369,30 @@ mod tests {
         let map = Map::parse("121\n111\n").unwrap();
         let t = Planner::new().plan(&map, (0, 0), Heading::East, (0, 2)).unwrap();
         assert_eq!(t.path, vec![(0, 0), (1, 0), (1, 1), (1, 2), (0, 2)]);
+    }
+
+    #[test]
+    fn issue_14_through_unknown_plans_as_on_an_all_free_map() {
+        // The original Cute, robot (0, 0) facing EAST, destination (2, 3): F F F R F F (observed).
+        let unknown = Map::new(20, 20).unwrap();
+        assert!(matches!(
+            Planner::new().plan(&unknown, (0, 0), Heading::East, (2, 3)),
+            Err(PlanError::DestinationNotFree { value: CellValue::Unknown, .. })
+        ));
+        let mut p = Planner::new().through_unknown(true);
+        assert!(p.plans_through_unknown());
+        let t = p.plan(&unknown, (0, 0), Heading::East, (2, 3)).unwrap();
+        assert_eq!(nums(&t.commands), [0, 0, 0, 1, 0, 0]);
+        let free = Map::parse(&format!("{}\n", "1".repeat(20)).repeat(20)).unwrap();
+        assert_eq!(Planner::new().plan(&free, (0, 0), Heading::East, (2, 3)).unwrap(), t);
+        // Known obstacles are still avoided.
+        let walled = Map::parse("1022\n1022\n2222\n").unwrap();
+        let t = p.plan(&walled, (0, 0), Heading::East, (0, 2)).unwrap();
+        assert_eq!(t.path, vec![(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2)]);
+        assert!(matches!(
+            p.plan(&walled, (0, 0), Heading::East, (0, 1)),
+            Err(PlanError::DestinationNotFree { .. })
+        ));
     }
 
     #[test]

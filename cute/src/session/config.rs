@@ -6,6 +6,15 @@
 //! ([`Compat::max_batch`]). Its names (`default`, alias `none`, and `explobot-2024`) come from one
 //! table, the [`clap::ValueEnum`] derive, which also serves [`FromStr`].
 //!
+//! [`CuteConfig::map`] is a known map to start from (`--map FILE`, [`crate::map_file`]);
+//! [`CuteConfig::with_map`] takes its size and robot cell.
+//!
+//! `--compat explobot-2024` in short (details in [`super`] and [`super::quirks`]): `Msg`
+//! little-endian; no SEND_ROBOT_POSITION nor SEND_MOVE_CARTOGRAPHY (they crash the original);
+//! batches of at most 50 commands, fire-and-forget (the original answers nothing); a click plans
+//! through unknown cells as if free, with a warning; after a STOP the original drops the next
+//! batch, so Cute keeps the robot where it was and warns when it sends that batch.
+//!
 //! Invariants: `Compat::max_batch() <= MAX_BATCH`, so a batch length always fits the one-byte
 //! `n_total`.
 //!
@@ -29,7 +38,7 @@ use thiserror::Error;
 
 use super::Status;
 use crate::cartography::CartoError;
-use crate::map::MapError;
+use crate::map::{Map, MapError};
 
 /// Largest trajectory batch on the wire (`n_total` is one byte).
 pub const MAX_BATCH: usize = 255;
@@ -43,7 +52,8 @@ pub enum Compat {
     #[default]
     #[value(name = "default", alias = "none")]
     Default,
-    /// The original 2024 Carto: little-endian `Msg`, trajectories only, batches ≤ 50.
+    /// The original 2024 Carto: little-endian `Msg`, trajectories only, batches ≤ 50, clicks
+    /// planned through unknown cells, the batch after a STOP dropped.
     #[value(name = "explobot-2024")]
     Explobot2024,
 }
@@ -55,6 +65,12 @@ impl Compat {
             Compat::Default => MsgOrder::BigEndian,
             Compat::Explobot2024 => MsgOrder::LittleEndian,
         }
+    }
+
+    /// True if a click plans through unknown cells as if they were free: the original Carto cannot
+    /// map, so with it the map is unknown unless `--map` loads one.
+    pub fn plans_through_unknown(self) -> bool {
+        self == Compat::Explobot2024
     }
 
     /// The largest trajectory batch this Carto accepts.
@@ -93,6 +109,25 @@ pub struct CuteConfig {
     pub move_timeout: Duration,
     /// Largest incoming `Size` accepted.
     pub max_frame: usize,
+    /// A known map to start from instead of an all-unknown one; it must be `rows × cols`
+    /// (waypoints and the destination are read as free, the robot is put at `start`).
+    pub map: Option<Map>,
+}
+
+impl CuteConfig {
+    /// Starts from the known `map`: its size, and its robot cell (5) as the start if it marks
+    /// one. `start` is the start the user gave, if any: it is used when the map marks no robot,
+    /// and must agree with the map's robot cell otherwise.
+    pub fn with_map(self, map: Map, start: Option<(u8, u8)>) -> Result<CuteConfig, CuteError> {
+        let start = match (map.robot(), start) {
+            (Some(on_map), Some(given)) if on_map != given => {
+                return Err(CuteError::StartConflict { on_map, given });
+            }
+            (Some(on_map), _) => on_map,
+            (None, given) => given.unwrap_or(self.start),
+        };
+        Ok(CuteConfig { rows: map.rows(), cols: map.cols(), start, map: Some(map), ..self })
+    }
 }
 
 impl Default for CuteConfig {
@@ -105,6 +140,7 @@ impl Default for CuteConfig {
             compat: Compat::Default,
             move_timeout: Duration::from_secs(5),
             max_frame: link::DEFAULT_MAX_FRAME,
+            map: None,
         }
     }
 }
@@ -119,6 +155,34 @@ pub enum CuteError {
     /// The start cell is outside the map.
     #[error("bad start: {0}")]
     Start(#[from] CartoError),
+    /// The known map's size differs from `rows × cols`.
+    #[error("the map is {map_rows}x{map_cols}, the session {rows}x{cols}")]
+    MapSize {
+        /// Session rows.
+        rows: usize,
+        /// Session columns.
+        cols: usize,
+        /// Map rows.
+        map_rows: usize,
+        /// Map columns.
+        map_cols: usize,
+    },
+    /// The start cell is an obstacle on the known map.
+    #[error("the start cell ({x}, {y}) is an obstacle on the map")]
+    StartBlocked {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+    },
+    /// The map marks the robot (5) in another cell than the start given.
+    #[error("the map puts the robot at {on_map:?}, the start given is {given:?}")]
+    StartConflict {
+        /// The map's robot cell.
+        on_map: (u8, u8),
+        /// The start given.
+        given: (u8, u8),
+    },
     /// The action is not possible with the original Carto.
     #[error("{what} is not supported with --compat explobot-2024")]
     Unsupported {
@@ -154,6 +218,21 @@ mod tests {
             "Explobot-2024".parse::<Compat>(),
             Err(CuteError::UnknownCompat { name: "Explobot-2024".into() })
         );
+    }
+
+    #[test]
+    fn issue_14_a_known_map_gives_size_and_start() {
+        let map = Map::parse("111\n150\n").unwrap();
+        let c = CuteConfig::default().with_map(map.clone(), None).unwrap();
+        assert_eq!((c.rows, c.cols, c.start, c.map.as_ref()), (2, 3, (1, 1), Some(&map)));
+        assert_eq!(CuteConfig::default().with_map(map.clone(), Some((1, 1))).unwrap().start, (1, 1));
+        assert_eq!(
+            CuteConfig::default().with_map(map, Some((0, 0))),
+            Err(CuteError::StartConflict { on_map: (1, 1), given: (0, 0) })
+        );
+        let unmarked = Map::parse("111\n110\n").unwrap();
+        assert_eq!(CuteConfig::default().with_map(unmarked.clone(), Some((0, 2))).unwrap().start, (0, 2));
+        assert_eq!(CuteConfig::default().with_map(unmarked, None).unwrap().start, (0, 0));
     }
 
     #[test]

@@ -78,6 +78,30 @@ pub enum CuteEvent {
         /// Commands sent.
         commands: usize,
     },
+    /// Compat mode: the path to `(x, y)` crosses `cells` unknown cells, planned as if free (the
+    /// original Carto neither maps nor checks for obstacles during a trajectory).
+    PlannedThroughUnknown {
+        /// Destination row.
+        x: u8,
+        /// Destination column.
+        y: u8,
+        /// Unknown cells on the path (the destination included).
+        cells: usize,
+    },
+    /// Compat mode: a STOP went out earlier, so the original Carto drops this batch of
+    /// `commands` commands; the robot is believed to stay at `(x, y)` (see
+    /// [`super::quirks`]).
+    BatchDropped {
+        /// Commands in the dropped batch.
+        commands: usize,
+        /// Row where the robot stays.
+        x: u8,
+        /// Column where the robot stays.
+        y: u8,
+    },
+    /// SEND_ROBOT_POSITION went unanswered [`HINT_AFTER`](super::HINT_AFTER) times in a row:
+    /// the peer may be the 2024 Carto ([`COMPAT_HINT`](super::COMPAT_HINT)).
+    CompatHint,
     /// Cartography finished.
     MappingDone {
         /// Known free cells.

@@ -14,7 +14,7 @@
 //! - `Moving`: each SET_ROBOT_POSITION moves the robot one FORWARD along the batch; MOVE_DONE puts
 //!   it at the batch's last cell; an obstacle aborts. After a disconnect the rest is re-planned
 //!   from the last reported cell. With the original Carto ([`Compat::Explobot2024`]) every batch
-//!   goes out at once and the robot is assumed at the destination.
+//!   goes out at once and the session assumes the robot at the destination.
 //!
 //! Invariants: at most one move or batch is in flight; [`Mission::next`] returns
 //! [`Next::Wait`] while one is.
@@ -75,6 +75,15 @@ impl Belief {
         }
     }
 
+    /// Moves the robot to where `commands` take it, with no feedback (the original Carto's
+    /// silent trajectories).
+    pub(crate) fn assume_driven(&mut self, commands: &[Move]) {
+        let (_, (cell, heading)) =
+            simulate((self.robot, self.heading), commands, self.map.rows(), self.map.cols());
+        self.set_robot(cell);
+        self.heading = heading;
+    }
+
     /// A fresh cartographer from the robot's pose.
     fn cartographer(&self) -> Option<Cartographer> {
         Cartographer::new(self.map.rows(), self.map.cols(), self.robot, self.heading).ok()
@@ -90,7 +99,7 @@ pub(crate) enum Next {
     Cartography(Move),
     /// Send this trajectory batch (one frame per command).
     Batch(Vec<Move>),
-    /// Send every batch now; the robot is already moved to the end. The mission is over.
+    /// Send every batch now (the robot is not moved yet). The mission is over.
     FireAndForget(Vec<Vec<Move>>),
     /// Cartography is complete. The mission is over.
     Mapped(CartoStats),
@@ -361,15 +370,9 @@ impl Moving {
             }
         }
         if self.compat == Compat::Explobot2024 {
-            // Fire and forget: the original Carto never answers a trajectory.
-            let all: Vec<Vec<Move>> = self.batches.drain(..).collect();
-            let mut pose = (belief.robot, belief.heading);
-            for batch in &all {
-                pose = simulate(pose, batch, belief.map.rows(), belief.map.cols()).1;
-            }
-            belief.set_robot(pose.0);
-            belief.heading = pose.1;
-            return Next::FireAndForget(all);
+            // Fire and forget: the original Carto never answers a trajectory. The session moves
+            // the belief ([`Belief::assume_driven`]) unless the original drops the batch.
+            return Next::FireAndForget(self.batches.drain(..).collect());
         }
         let Some(batch) = self.batches.pop_front() else {
             return Next::Arrived;
@@ -550,6 +553,8 @@ mod tests {
         let commands = [Move::Forward, Move::Forward, Move::Right];
         let mut m = Mission::Moving(Moving::new((0, 2), &commands, Compat::Explobot2024));
         assert_eq!(m.next(&mut b, &mut p, at(0), T), Next::FireAndForget(vec![commands.to_vec()]));
+        assert_eq!(b.robot, (0, 0), "the session decides whether the batch runs");
+        b.assume_driven(&commands);
         assert_eq!((b.robot, b.heading), ((0, 2), Heading::South));
     }
 

@@ -29,6 +29,13 @@
 //!   original replies nothing to trajectories, so a compat trajectory is fire-and-forget: all
 //!   batches are sent at once and the robot is assumed at the destination
 //!   ([`CuteEvent::TrajectorySent`]); any position Carto does report still updates the map.
+//!   The original cannot map, so a click plans through unknown cells as if they were free
+//!   ([`CuteEvent::PlannedThroughUnknown`]); those cells go back to unknown when the trajectory
+//!   is cleared. After a STOP the original drops the next batch: Cute sends only the first batch
+//!   of the next trajectory, keeps the robot where it was and reports
+//!   [`CuteEvent::BatchDropped`] (the rest would run from the wrong cell) — see [`quirks`].
+//! - No ROBOT_POSITION_RECEIVED for [`HINT_AFTER`] requests in a row → [`CuteEvent::CompatHint`]
+//!   ([`COMPAT_HINT`]): the original Carto ignores our big-endian ids.
 //! - Always tolerated: unsolicited ROBOT_POSITION_RECEIVED, stray MOVE_DONE, unknown ids, frames
 //!   split or merged arbitrarily. A fatal framing error drops the connection
 //!   ([`Cute::close_requested`]).
@@ -68,17 +75,20 @@ mod config;
 mod connection;
 mod events;
 mod mission;
+pub mod quirks;
 
 pub use config::{Compat, CuteConfig, CuteError, MAX_BATCH, MAX_BATCH_COMPAT};
 pub use connection::{RECONNECT_MAX, RECONNECT_MIN};
 pub use events::{Counters, CuteEvent, Status, Waiting};
 pub use mission::MAX_REJECTED;
+pub use quirks::{COMPAT_HINT, HINT_AFTER};
 
 use crate::cartography::{CartoStats, Cartographer};
 use crate::map::{CellValue, Map};
-use crate::trajectory::{PlanError, Planner};
+use crate::trajectory::{self, PlanError, Planner};
 use connection::Connection;
 use mission::{Answer, Belief, Mapping, Mission, Moving, Next, Obstacle};
+use quirks::Quirks;
 
 /// The Cute side of the link: map, robot, missions and the protocol state machine.
 #[derive(Debug, Clone)]
@@ -94,15 +104,32 @@ pub struct Cute {
     now: Instant,
     close_requested: bool,
     last_carto_stats: Option<CartoStats>,
+    quirks: Quirks,
+    /// Cells of the painted trajectory that were unknown before (compat): unknown again when
+    /// the trajectory is cleared.
+    unknown_path: Vec<(u8, u8)>,
 }
 
 impl Cute {
-    /// A session with an all-unknown map and the robot at `config.start`, not connected.
+    /// A session with an all-unknown map (or `config.map`) and the robot at `config.start`, not
+    /// connected.
     pub fn new(config: CuteConfig) -> Result<Cute, CuteError> {
-        let mut map = Map::new(config.rows, config.cols)?;
+        let mut map = match &config.map {
+            Some(known) if (known.rows(), known.cols()) != (config.rows, config.cols) => {
+                let (rows, cols, map_rows, map_cols) = (config.rows, config.cols, known.rows(), known.cols());
+                return Err(CuteError::MapSize { rows, cols, map_rows, map_cols });
+            }
+            Some(known) => known.clone(),
+            None => Map::new(config.rows, config.cols)?,
+        };
+        map.clear_trajectory();
         // Validates the start cell the same way cartography will.
         Cartographer::new(config.rows, config.cols, config.start, config.heading)?;
+        if map.at(config.start) == Some(CellValue::Obstacle) {
+            return Err(CuteError::StartBlocked { x: config.start.0, y: config.start.1 });
+        }
         map.set_robot(usize::from(config.start.0), usize::from(config.start.1))?;
+        let planner = Planner::new().through_unknown(config.compat.plans_through_unknown());
         Ok(Cute {
             belief: Belief { map, robot: config.start, heading: config.heading },
             connection: Connection::new(config.compat.msg_order(), config.max_frame),
@@ -111,10 +138,12 @@ impl Cute {
             mission: Mission::None,
             events: Vec::new(),
             counters: Counters::default(),
-            planner: Planner::new(),
+            planner,
             now: Instant::ZERO,
             close_requested: false,
             last_carto_stats: None,
+            quirks: Quirks::default(),
+            unknown_path: Vec::new(),
         })
     }
 
@@ -153,6 +182,12 @@ impl Cute {
     /// The counters.
     pub fn counters(&self) -> Counters {
         self.counters
+    }
+
+    /// Compat: true while the original Carto is believed to drop the next batch (a STOP went
+    /// out since the last batch).
+    pub fn batch_drop_pending(&self) -> bool {
+        self.quirks.drop_pending()
     }
 
     /// The running cartographer, if mapping.
@@ -264,13 +299,17 @@ impl Cute {
         if self.connection.ack_overdue(now, now + self.config.move_timeout) {
             self.counters.timeouts += 1;
             self.events.push(CuteEvent::MoveTimeout { waiting_for: Waiting::PositionAck });
+            if self.quirks.position_unanswered() {
+                warn!("{COMPAT_HINT}");
+                self.events.push(CuteEvent::CompatHint);
+            }
             self.send_position();
         }
         if self.mission.deadline().is_some_and(|deadline| now >= deadline) {
             warn!("no MOVE_DONE in time; stopping the robot");
             self.counters.timeouts += 1;
             self.events.push(CuteEvent::MoveTimeout { waiting_for: Waiting::MoveDone });
-            self.send(&GuiMessage::StopRobot);
+            self.send_stop();
             self.end_mission(Status::Idle);
         }
         self.pump();
@@ -288,20 +327,22 @@ impl Cute {
         }
         let (robot, heading) = (self.belief.robot, self.belief.heading);
         let carto = Cartographer::new(self.config.rows, self.config.cols, robot, heading)?;
-        self.belief.map.clear_trajectory();
+        self.clear_trajectory();
         self.mission = Mission::Mapping(Mapping::new(carto));
         self.status = Status::Mapping;
         self.pump();
         Ok(())
     }
 
-    /// Plans to `(x, y)` over known free cells and starts driving there.
+    /// Plans to `(x, y)` over known free cells (compat: also unknown ones, with a warning) and
+    /// starts driving there.
     pub fn go_to(&mut self, x: u8, y: u8) -> Result<(), PlanError> {
         if self.is_busy() {
             return Err(PlanError::Busy);
         }
+        self.clear_trajectory();
         let b = &mut self.belief;
-        let t = match self.planner.plan_on_map(&mut b.map, b.robot, b.heading, (x, y)) {
+        let t = match self.planner.plan(&b.map, b.robot, b.heading, (x, y)) {
             Ok(t) => t,
             Err(e) => {
                 if matches!(e, PlanError::NoPath { .. }) {
@@ -310,6 +351,15 @@ impl Cute {
                 return Err(e);
             }
         };
+        let unknown: Vec<(u8, u8)> =
+            t.path.iter().copied().filter(|&c| b.map.at(c) == Some(CellValue::Unknown)).collect();
+        trajectory::paint(&mut b.map, &t);
+        if !unknown.is_empty() {
+            let cells = unknown.len();
+            warn!(x, y, cells, "path planned through unknown cells as if they were free");
+            self.events.push(CuteEvent::PlannedThroughUnknown { x, y, cells });
+        }
+        self.unknown_path = unknown;
         if t.commands.is_empty() {
             self.events.push(CuteEvent::Reached { x, y });
             return Ok(());
@@ -320,12 +370,13 @@ impl Cute {
         Ok(())
     }
 
-    /// STOP: stops the robot now and drops the mission.
+    /// STOP: stops the robot now and drops the mission. Compat: the original Carto will drop the
+    /// next batch ([`quirks`]).
     pub fn stop(&mut self) {
         if self.is_connected() {
-            self.send(&GuiMessage::StopRobot);
+            self.send_stop();
         }
-        self.belief.map.clear_trajectory();
+        self.clear_trajectory();
         self.end_mission(Status::Idle);
         self.events.push(CuteEvent::Stopped);
     }
@@ -334,6 +385,7 @@ impl Cute {
     /// restarts from scratch after the move in flight.
     pub fn reset_map(&mut self) {
         let robot = self.belief.robot;
+        self.unknown_path.clear();
         self.belief.map.reset();
         let _ = self.belief.map.set_robot(usize::from(robot.0), usize::from(robot.1));
         if let Mission::Mapping(m) = &mut self.mission {
@@ -351,6 +403,22 @@ impl Cute {
         let n = self.connection.encode(msg);
         self.counters.frames_out += 1;
         self.counters.bytes_out += n as u64;
+    }
+
+    fn send_stop(&mut self) {
+        self.send(&GuiMessage::StopRobot);
+        self.quirks.stop_sent(self.config.compat);
+    }
+
+    /// Clears the painted trajectory; cells it painted over unknown ones are unknown again.
+    fn clear_trajectory(&mut self) {
+        for (x, y) in self.unknown_path.drain(..) {
+            let map = &mut self.belief.map;
+            if matches!(map.at((x, y)), Some(CellValue::Waypoint | CellValue::Destination)) {
+                let _ = map.set(usize::from(x), usize::from(y), CellValue::Unknown);
+            }
+        }
+        self.belief.map.clear_trajectory();
     }
 
     fn send_position(&mut self) {
@@ -389,11 +457,23 @@ impl Cute {
             }
             Next::Batch(batch) => self.send_batch(&batch),
             Next::FireAndForget(all) => {
-                for batch in &all {
-                    self.send_batch(batch);
+                if self.quirks.take_drop() {
+                    // The original skips this batch; the rest would run from the wrong cell.
+                    let first = all.first().map(Vec::as_slice).unwrap_or_default();
+                    self.send_batch(first);
+                    let (x, y) = self.belief.robot;
+                    warn!(x, y, commands = first.len(), "the 2024 Carto drops the first batch after a STOP");
+                    self.events.push(CuteEvent::BatchDropped { commands: first.len(), x, y });
+                    self.clear_trajectory();
+                } else {
+                    for batch in &all {
+                        self.send_batch(batch);
+                    }
+                    // One move of the marker: cells between batches were not seen either.
+                    self.belief.assume_driven(&all.concat());
+                    let commands = all.iter().map(Vec::len).sum();
+                    self.events.push(CuteEvent::TrajectorySent { commands });
                 }
-                let commands = all.iter().map(Vec::len).sum();
-                self.events.push(CuteEvent::TrajectorySent { commands });
                 self.end_mission(Status::Idle);
             }
             Next::Mapped(stats) => {
@@ -410,14 +490,14 @@ impl Cute {
                 self.end_mission(Status::Done);
             }
             Next::Arrived => {
-                self.belief.map.clear_trajectory();
+                self.clear_trajectory();
                 let (x, y) = self.belief.robot;
                 self.events.push(CuteEvent::Reached { x, y });
                 self.end_mission(Status::Idle);
             }
             Next::NoPath((x, y)) => {
                 self.events.push(CuteEvent::NoPath { x, y });
-                self.belief.map.clear_trajectory();
+                self.clear_trajectory();
                 self.end_mission(Status::Idle);
             }
         }
@@ -427,6 +507,7 @@ impl Cute {
         debug!(?msg, "from Carto");
         match msg {
             GuiMessage::RobotPositionReceived => {
+                self.quirks.position_answered();
                 if self.connection.acknowledge() {
                     self.events.push(CuteEvent::PositionAcknowledged);
                 } else {
