@@ -116,7 +116,7 @@ fn start_cell_outside_the_room_is_rejected() {
 fn issue_15_absurd_coordinates_and_obstacles_outside_the_room_are_errors_where_written() {
     // x = 2^32 m: a number, finite, and absurd.
     let e = rejects("  obstacles: [Circle(center: (4294967296.0, 0.5), radius: 0.1)],");
-    assert_eq!((e.line, e.column), (6, 31), "{e}");
+    assert_eq!((e.line, e.column), (6, 30), "{e}");
     assert!(e.message.starts_with("obstacles[0].center:") && e.message.contains("1000"), "{e}");
     let e = rejects("  obstacles: [Box(center: (0.5, 0.5), size: (1e9, 0.2))],");
     assert_eq!(e.line, 6, "{e}");

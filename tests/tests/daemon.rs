@@ -98,6 +98,7 @@ fn issue_15_sigterm_mid_move_sends_the_stop_frame_within_50_ms_and_the_wheels_st
         drives(&tap).into_iter().skip(before).find(|(t, d)| *t >= t0 && *d == (0, 0, 0)).map(|(t, _)| t)
     });
     let latency = stop.duration_since(t0);
+    eprintln!("stop frame on the motor link {latency:?} after SIGTERM was sent");
     assert!(latency <= Duration::from_millis(50), "stop frame {latency:?} after SIGTERM");
     let code = carto.wait_exit(Duration::from_secs(10));
     assert_eq!(code, Some(0), "exit code after SIGTERM; log:\n{}", carto.log());
@@ -233,6 +234,7 @@ fn issue_14_silent_client_is_dropped_within_30_s_motors_stop_and_the_next_is_ser
     let dropped = wait_for("carto drops the silent client", Duration::from_secs(30), || {
         carto.log().contains("idle limit").then(Instant::now)
     });
+    eprintln!("silent client dropped {:?} after its last byte", dropped.duration_since(t0));
     assert!(dropped.duration_since(t0) <= Duration::from_secs(30));
     // The motors stop at once, long before the 7 cells are driven.
     let n = drives(&tap).len();
@@ -274,6 +276,7 @@ fn issue_15_a_megabyte_of_unknown_ids_writes_fewer_than_100_log_lines() {
     let new_lines = log.lines().count() - lines_before;
     assert!(log.contains("unknown message ignored"), "the flood was not seen: {log}");
     assert!(log.contains("more like this"), "no summary of the suppressed warnings: {log}");
+    eprintln!("{new_lines} log lines for {} unknown frames", flood.len() / frame.len());
     assert!(new_lines < 100, "{new_lines} log lines for {} frames", flood.len() / frame.len());
 }
 

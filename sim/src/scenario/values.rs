@@ -36,6 +36,10 @@ fn in_range(v: f32) -> bool {
 }
 
 fn positive(v: f32) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+fn positive_m(v: f32) -> bool {
     in_range(v) && v > 0.0
 }
 
@@ -102,14 +106,14 @@ pub fn point<'de, D: Deserializer<'de>>(d: D) -> Result<(f32, f32), D::Error> {
 pub fn size<'de, D: Deserializer<'de>>(d: D) -> Result<(f32, f32), D::Error> {
     checked(
         d,
-        |s: &(f32, f32)| positive(s.0) && positive(s.1),
+        |s: &(f32, f32)| positive_m(s.0) && positive_m(s.1),
         "a size is two positive numbers up to 1000 (metres)",
     )
 }
 
 /// A length, metres.
 pub fn length<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
-    checked(d, |v: &f32| positive(*v), "a length is a positive number of metres, up to 1000")
+    checked(d, |v: &f32| positive_m(*v), "a length is a positive number of metres, up to 1000")
 }
 
 /// Any finite number (an angle).
