@@ -69,7 +69,7 @@ mod tests {
             b.failed(t);
             let mut probe = t;
             while !b.due(probe) {
-                probe = probe + Duration::from_millis(1);
+                probe += Duration::from_millis(1);
             }
             waits.push((probe - t).total_millis());
             t = probe;

@@ -174,6 +174,23 @@ fn issue_15_twin_killed_and_restarted_mid_mission_carto_reconnects_and_a_new_tra
 }
 
 #[test]
+fn issue_15_exit_on_link_loss_stops_the_motors_and_exits_1() {
+    let dir = TempDir::new("explobot-daemon-exit-on-loss");
+    let twin = Twin::start(&dir, 0.5);
+    let (tap_port, tap) = motor_tap(twin.base);
+    // The sensor link goes through the twin directly: killing the twin drops it, while the
+    // motor link (through the tap) is still open for the stop frame.
+    let mut carto = Carto::start(&dir, tap_port, twin.base + 1, &["--exit-on-link-loss"]);
+    wait_for("carto drives the board", Duration::from_secs(20), || (!drives(&tap).is_empty()).then_some(()));
+    let before = drives(&tap).len();
+    drop(twin);
+    assert_eq!(carto.wait_exit(Duration::from_secs(20)), Some(1), "log:\n{}", carto.log());
+    let log = carto.log();
+    assert!(log.contains("--exit-on-link-loss"), "{log}");
+    assert!(drives(&tap).iter().skip(before).any(|(_, d)| *d == (0, 0, 0)), "no stop frame: {log}");
+}
+
+#[test]
 fn issue_15_hundred_back_to_back_client_cycles_are_all_served() {
     let dir = TempDir::new("explobot-daemon-cycles");
     let twin = Twin::start(&dir, 0.5);
@@ -181,12 +198,15 @@ fn issue_15_hundred_back_to_back_client_cycles_are_all_served() {
     let mut resets = Vec::new();
     for i in 0..100 {
         let mut c = carto.client();
-        c.send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
-        match c.try_read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20)) {
-            Ok(_) => {}
-            Err(e) => resets.push(format!("cycle {i}: {e}")),
+        let cycle = c
+            .try_send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East })
+            .and_then(|()| {
+                c.try_read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20))
+            })
+            .and_then(|_| c.try_send(GuiMessage::StopRobot));
+        if let Err(e) = cycle {
+            resets.push(format!("cycle {i}: {e}"));
         }
-        c.send(GuiMessage::StopRobot);
         drop(c); // closes at once; the next cycle connects immediately
     }
     assert!(resets.is_empty(), "{} of 100 cycles not served: {resets:?}", resets.len());

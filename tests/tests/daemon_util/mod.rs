@@ -235,16 +235,28 @@ impl Client {
         self.send_raw(&m.to_bytes(MsgOrder::BigEndian));
     }
 
-    pub fn send_raw(&mut self, mut bytes: &[u8]) {
+    pub fn send_raw(&mut self, bytes: &[u8]) {
+        self.try_send_raw(bytes).unwrap_or_else(|e| panic!("{e}"));
+    }
+
+    /// Sends `m`, or says why the connection would not take it.
+    pub fn try_send(&mut self, m: GuiMessage) -> Result<(), String> {
+        self.try_send_raw(&m.to_bytes(MsgOrder::BigEndian))
+    }
+
+    fn try_send_raw(&mut self, mut bytes: &[u8]) -> Result<(), String> {
         let deadline = Instant::now() + Duration::from_secs(60);
         while !bytes.is_empty() {
-            let n = self.link.write(bytes).expect("carto closed the connection");
+            let n = self.link.write(bytes).map_err(|e| format!("carto closed the connection: {e}"))?;
             bytes = &bytes[n..];
             if n == 0 {
-                assert!(Instant::now() < deadline, "carto stopped reading");
+                if Instant::now() >= deadline {
+                    return Err("carto stopped reading".to_owned());
+                }
                 std::thread::sleep(Duration::from_millis(1));
             }
         }
+        Ok(())
     }
 
     /// Messages up to the first matching `want`, or why there was none within `limit`.
