@@ -12,7 +12,12 @@
 //! - the motor board always has a valid drive frame younger than 500 ms (resend cadence), and a
 //!   zero frame goes out at once on STOP, disconnect, peer loss and move failure;
 //! - after a fatal framing error, [`Carto::should_close_client`] stays true and the client's bytes
-//!   are ignored until [`Carto::on_client_disconnected`].
+//!   are ignored until [`Carto::on_client_disconnected`];
+//! - while a board link is down (`on_*_link_lost` until `on_*_link_up`) no move runs and none is
+//!   reported done: the move that was running and every move asked for meanwhile end without
+//!   `MOVE_DONE` (Cute's move timeout fires); positions are still acknowledged;
+//! - repeated warnings (unknown ids, bad frames, moves refused) are rate-limited per kind
+//!   ([`crate::ratelimit`]): one line, then "N more like this", at most once a second.
 //!
 //! ```
 //! use carto::{Carto, CartoConfig};
@@ -33,8 +38,10 @@ use robot_model::time::Instant;
 use crate::CartoConfig;
 use crate::motor::{Drive, Motor};
 use crate::pilot::{Health, Pilot, Request};
+use crate::ratelimit::RateLimiter;
 use crate::sensors::{LineTimer, PeerEvent, SensorEvent, SensorState};
 use crate::ultrasound::Ultrasound;
+use crate::warn_limited;
 use crate::wire;
 use robot_model::grid::GridPose;
 
@@ -53,6 +60,8 @@ pub struct CartoStats {
     pub fatal_errors: u64,
     /// Frames with an unknown `Msg`, ignored.
     pub unknown_messages: u64,
+    /// Moves asked for while a board link was down, dropped without `MOVE_DONE`.
+    pub moves_refused: u64,
     /// Moves completed within tolerance.
     pub moves_done: u64,
     /// Moves that could not run or failed.
@@ -127,6 +136,7 @@ pub struct Carto {
     sensor_out: Vec<u8>,
     motor_link_up: bool,
     sensor_link_up: bool,
+    limiter: RateLimiter,
     stats: CartoStats,
 }
 
@@ -151,6 +161,7 @@ impl Carto {
             sensor_out: Vec::new(),
             motor_link_up: true,
             sensor_link_up: true,
+            limiter: RateLimiter::new(robot_model::time::Duration::from_secs(1)),
             stats: CartoStats::default(),
             cfg,
         }
@@ -203,11 +214,20 @@ impl Carto {
                     self.stats.client_frames_in += 1;
                     if let GuiMessage::Unknown { msg: id, data } = &msg {
                         self.stats.unknown_messages += 1;
-                        tracing::warn!(peer = %peer, msg = format_args!("{id:#06x}"), len = data.len(), "unknown message ignored");
+                        warn_limited!(self.limiter, now, "unknown message", peer = %peer, msg = format_args!("{id:#06x}"), len = data.len(), "unknown message ignored");
                         continue;
                     }
                     tracing::debug!(peer = %peer, ?msg, "request");
                     let req = wire::request_from(&msg);
+                    if matches!(req, Request::Cartography { .. } | Request::Trajectory { .. })
+                        && !(self.motor_link_up && self.sensor_link_up)
+                    {
+                        self.stats.moves_refused += 1;
+                        warn_limited!(self.limiter, now, "move while a board link is down", peer = %peer, ?msg,
+                            motor = self.motor_link_up, sensor = self.sensor_link_up,
+                            "move dropped, no MOVE_DONE: a board link is down");
+                        continue;
+                    }
                     if let Request::Ignored { msg: id } = req {
                         tracing::info!(peer = %peer, msg = format_args!("{id:#06x}"), "message for Cute received by Carto: ignored");
                     }
@@ -225,7 +245,7 @@ impl Carto {
                 }
                 Err(e) => {
                     self.stats.protocol_errors += 1;
-                    tracing::warn!(peer = %peer, error = %e, "bad frame skipped");
+                    warn_limited!(self.limiter, now, "bad frame", peer = %peer, error = %e, "bad frame skipped");
                 }
             }
         }
@@ -274,14 +294,12 @@ impl Carto {
         }
     }
 
-    /// The motor board link is gone: motors considered stopped, the current move fails, moves are
-    /// refused until [`Carto::on_motor_link_up`].
+    /// The motor board link is gone (the caller logs it): motors considered stopped, the current
+    /// move and the queued ones are dropped without `MOVE_DONE`, moves are refused the same way
+    /// until [`Carto::on_motor_link_up`].
     pub fn on_motor_link_lost(&mut self, now: Instant) {
-        if self.motor_link_up {
-            tracing::error!("motor board link lost");
-        }
         self.motor_link_up = false;
-        self.pilot.on_fault(now, &mut self.motor, "motor board link lost");
+        self.pilot.on_link_lost(now, &mut self.motor, "motor board link lost");
         self.motor.take_drives();
         self.motor_out.clear();
         self.flush_replies();
@@ -294,18 +312,16 @@ impl Carto {
         self.flush_motor();
     }
 
-    /// The sensor board link is gone: peer lost at once.
+    /// The sensor board link is gone (the caller logs it): peer lost at once, the motors stop,
+    /// moves are dropped as for [`Carto::on_motor_link_lost`] until [`Carto::on_sensor_link_up`].
     pub fn on_sensor_link_lost(&mut self, now: Instant) {
-        if self.sensor_link_up {
-            tracing::error!("sensor board link lost");
-        }
         self.sensor_link_up = false;
         self.sensor_out.clear();
         if self.keep.force_lost() {
             self.stats.peer_lost_events += 1;
         }
         self.sensors.clear();
-        self.pilot.on_fault(now, &mut self.motor, "sensor board link lost");
+        self.pilot.on_link_lost(now, &mut self.motor, "sensor board link lost");
         self.flush_replies();
         self.flush_motor();
     }
@@ -339,6 +355,14 @@ impl Carto {
         self.pilot.poll(now, &mut self.motor, &self.sensors, &self.ultrasound, health);
         self.flush_replies();
         self.flush_motor();
+        for (kind, more) in self.limiter.drain(now) {
+            tracing::warn!(kind, more, "{more} more like this in the last second");
+        }
+    }
+
+    /// The warning limiter, for the caller's own repeated warnings (same kinds, same budget).
+    pub fn limiter(&mut self) -> &mut RateLimiter {
+        &mut self.limiter
     }
 
     fn health(&self) -> Health {

@@ -113,6 +113,18 @@ pub struct CartoConfig {
 
     /// Largest accepted link frame `Size`, bytes.
     pub max_frame: usize,
+    /// A client that sends no byte for this long is closed and the next one served (`None`: never;
+    /// Cute may stay silent while the operator watches, so this is off by default).
+    pub client_idle_limit: Option<Duration>,
+    /// A client whose host stops answering (no bytes and no TCP keepalive answer) is dropped after
+    /// about this long (`None`: the system's keepalive, i.e. off). Applied by the binary to the
+    /// TCP socket; the in-memory links of the simulator ignore it.
+    pub client_dead_after: Option<Duration>,
+    /// First wait before reopening a board port that went away; doubles up to
+    /// `board_retry_max`.
+    pub board_retry_initial: Duration,
+    /// Longest wait between two attempts to reopen a board port.
+    pub board_retry_max: Duration,
     /// After the bumper stops a FORWARD, drive back to the cell the move started from.
     pub back_off_after_bump: bool,
     /// Checksums accepted on the motor board's frames (what its firmware emits).
@@ -167,6 +179,10 @@ impl Default for CartoConfig {
             keep_state_period: Duration::from_millis(500),
             peer_lost_after: Duration::from_millis(1500),
             max_frame: 1024,
+            client_idle_limit: None,
+            client_dead_after: Some(Duration::from_secs(15)),
+            board_retry_initial: Duration::from_millis(250),
+            board_retry_max: Duration::from_secs(2),
             back_off_after_bump: true,
             motor_checksum: ChecksumPolicy::Sum,
             motor_baud: 115_200,

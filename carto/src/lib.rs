@@ -1,11 +1,13 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
 
+pub mod backoff;
 mod carto;
 pub mod config;
 pub mod motor;
 pub mod odometry;
 pub mod pilot;
+pub mod ratelimit;
 pub mod runtime;
 pub mod sensors;
 pub mod ultrasound;

@@ -1,19 +1,41 @@
 #![doc = include_str!("../README.md")]
-//! `carto`: the robot controller binary, a thin shell over [`carto::CartoRuntime`].
+//! `carto`: the robot controller binary, a thin shell over [`carto::CartoRuntime`] that owns the
+//! wall clock, the signals and the ports.
+//!
+//! Every way it ends stops the motors first (a bare stop frame, drained for at most
+//! [`DRAIN_LIMIT`]), logs why and exits with a documented code:
+//!
+//! | code | why |
+//! |---|---|
+//! | 0 | SIGTERM, SIGINT or SIGHUP |
+//! | 1 | a fatal error while running (a board link lost with `--exit-on-link-loss`, the listener failing) |
+//! | 2 | it could not start: bad arguments, unreadable profile, address not available (with `--exit-on-link-loss`, a board port that does not open) |
+//! | 3 | an internal error (a panic) |
 
+use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration as StdDuration;
 
 use anyhow::{Context, Result, bail};
+use carto::backoff::Backoff;
 use carto::{Carto, CartoConfig, CartoRuntime};
 use clap::{Parser, ValueEnum};
 use robot_model::profile::RobotProfile;
-use robot_model::time::Instant;
-use transport::{Clock, DynLink, SerialLink, TcpLink, TcpListenerLink, WallClock};
+use robot_model::time::{Duration, Instant};
+use transport::{Clock, DynLink, KeepAlive, SerialLink, TcpLink, TcpListenerLink, WallClock};
 
 const DEFAULT_PROFILE: &str = "scenarios/robots/mecanum-4wd.ron";
+/// Longest wait for the stop frame to leave on the way out.
+const DRAIN_LIMIT: StdDuration = StdDuration::from_millis(200);
+/// Longest a reconnection to a board over TCP may block the loop.
+const BOARD_CONNECT_TIMEOUT: StdDuration = StdDuration::from_millis(200);
+
+const EXIT_FATAL: u8 = 1;
+const EXIT_START: u8 = 2;
+const EXIT_PANIC: u8 = 3;
 
 /// How Carto reaches the boards.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -45,9 +67,26 @@ struct Args {
     /// Robot profile (RON); default scenarios/robots/mecanum-4wd.ron if present, else built in.
     #[arg(long)]
     profile: Option<PathBuf>,
+    /// Exit (code 1, or 2 at start) when a board link is lost or cannot be opened, instead of
+    /// retrying with back-off: for a supervisor that restarts Carto.
+    #[arg(long)]
+    exit_on_link_loss: bool,
+    /// Close a client that sends nothing for this many seconds and serve the next (0 = never).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.0)]
+    client_idle_limit: f64,
+    /// Drop a client whose host answers neither bytes nor TCP keepalive probes for about this many
+    /// seconds (0 = the system's keepalive, i.e. off).
+    #[arg(long, value_name = "SECONDS", default_value_t = 15.0)]
+    client_dead_after: f64,
 }
 
-fn main() {
+/// Why the main loop ended.
+enum Ended {
+    Signal(usize),
+    Fatal(String),
+}
+
+fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
@@ -55,9 +94,48 @@ fn main() {
         )
         .with_writer(std::io::stderr)
         .init();
-    if let Err(e) = run(Args::parse()) {
-        eprintln!("carto: error: {e:#}");
-        std::process::exit(1);
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        tracing::error!(%info, "panic: stopping the motors");
+        default_hook(info);
+    }));
+    let args = Args::parse();
+    // Signals first: from here on SIGTERM, SIGINT and SIGHUP only set this flag.
+    let signal = Arc::new(AtomicUsize::new(0));
+    for sig in [signal_hook::consts::SIGTERM, signal_hook::consts::SIGINT, signal_hook::consts::SIGHUP] {
+        if let Err(e) = signal_hook::flag::register_usize(sig, Arc::clone(&signal), sig as usize) {
+            eprintln!("carto: error: cannot install the handler of signal {sig}: {e}");
+            return ExitCode::from(EXIT_START);
+        }
+    }
+    let mut daemon = match Daemon::start(args, signal) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("carto: error: {e:#}");
+            tracing::error!(exit_code = EXIT_START, "carto could not start: {e:#}");
+            return ExitCode::from(EXIT_START);
+        }
+    };
+    let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| daemon.serve()));
+    let (why, code, emergency) = match outcome {
+        Ok(Ended::Signal(sig)) => (format!("signal {}", signal_name(sig)), 0, false),
+        Ok(Ended::Fatal(why)) => (why, EXIT_FATAL, false),
+        Err(_) => ("internal error (panic)".to_owned(), EXIT_PANIC, true),
+    };
+    let drained = daemon.stop_motors(emergency);
+    tracing::info!(why = %why, exit_code = code, stop_frame_sent = drained, stats = ?daemon.rt.carto().stats(), "carto stopped");
+    if code == EXIT_FATAL {
+        eprintln!("carto: error: {why}");
+    }
+    ExitCode::from(code)
+}
+
+fn signal_name(sig: usize) -> String {
+    match i32::try_from(sig) {
+        Ok(signal_hook::consts::SIGTERM) => "SIGTERM".to_owned(),
+        Ok(signal_hook::consts::SIGINT) => "SIGINT".to_owned(),
+        Ok(signal_hook::consts::SIGHUP) => "SIGHUP".to_owned(),
+        _ => sig.to_string(),
     }
 }
 
@@ -75,22 +153,6 @@ fn load_profile(path: Option<&Path>) -> Result<RobotProfile> {
     }
 }
 
-fn open_board(kind: TransportKind, which: &str, port: &str, baud: u32) -> Result<DynLink> {
-    let link: DynLink = match kind {
-        TransportKind::Sim | TransportKind::Serial => Box::new(
-            SerialLink::builder(port, baud)
-                .open()
-                .with_context(|| format!("cannot open the {which} board port {port} ({baud} baud)"))?,
-        ),
-        TransportKind::Tcp => Box::new(
-            TcpLink::connect_timeout(port, StdDuration::from_secs(3))
-                .with_context(|| format!("cannot connect to the {which} board at {port}"))?,
-        ),
-    };
-    tracing::info!(board = which, port, baud, "board link open");
-    Ok(link)
-}
-
 fn default_port(kind: TransportKind, which: &str) -> Result<String> {
     Ok(match (kind, which) {
         (TransportKind::Sim, "motor") => "run/tty-motor".to_owned(),
@@ -101,75 +163,205 @@ fn default_port(kind: TransportKind, which: &str) -> Result<String> {
     })
 }
 
-fn run(args: Args) -> Result<()> {
-    let profile = load_profile(args.profile.as_deref())?;
-    let cfg = CartoConfig::from_profile(&profile);
-    let motor_port = match args.motor_port.clone() {
-        Some(p) => p,
-        None => default_port(args.transport, "motor")?,
-    };
-    let sensor_port = match args.sensor_port.clone() {
-        Some(p) => p,
-        None => default_port(args.transport, "sensor")?,
-    };
-    let motor = open_board(args.transport, "motor", &motor_port, profile.serial.motor_baud)?;
-    let sensor = open_board(args.transport, "sensor", &sensor_port, profile.serial.sensor_baud)?;
-    let listener = TcpListenerLink::bind(args.listen.as_str())
-        .with_context(|| format!("cannot listen on {}", args.listen))?;
-    tracing::info!(
-        listen = %listener.local_addr(),
-        robot = %profile.name,
-        cell_m = cfg.cell_size_m,
-        "carto ready: waiting for Cute"
-    );
+fn seconds(flag: &str, s: f64) -> Result<Option<Duration>> {
+    if !(s.is_finite() && s >= 0.0) {
+        bail!("--{flag} must be a number of seconds, 0 or more (got {s})");
+    }
+    Ok((s > 0.0).then(|| Duration::from_secs_f64(s)))
+}
 
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = Arc::clone(&stop);
-        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
-            .context("cannot install the Ctrl-C handler")?;
+/// One board port: where it is, and how often to try it again while it is down.
+struct Board {
+    which: &'static str,
+    kind: TransportKind,
+    port: String,
+    baud: u32,
+    backoff: Backoff,
+    /// The current outage has been logged.
+    down_logged: bool,
+}
+
+impl Board {
+    fn open(&self, connect_timeout: StdDuration) -> Result<DynLink> {
+        let (which, port, baud) = (self.which, self.port.as_str(), self.baud);
+        Ok(match self.kind {
+            TransportKind::Sim | TransportKind::Serial => Box::new(
+                SerialLink::builder(port, baud)
+                    .open()
+                    .with_context(|| format!("cannot open the {which} board port {port} ({baud} baud)"))?,
+            ),
+            TransportKind::Tcp => Box::new(
+                TcpLink::connect_timeout(port, connect_timeout)
+                    .with_context(|| format!("cannot connect to the {which} board at {port}"))?,
+            ),
+        })
+    }
+}
+
+struct Daemon {
+    rt: CartoRuntime<TcpListenerLink, DynLink, DynLink>,
+    clock: WallClock,
+    boards: [Board; 2],
+    signal: Arc<AtomicUsize>,
+    exit_on_link_loss: bool,
+}
+
+impl Daemon {
+    fn start(args: Args, signal: Arc<AtomicUsize>) -> Result<Daemon> {
+        let profile = load_profile(args.profile.as_deref())?;
+        let mut cfg = CartoConfig::from_profile(&profile);
+        cfg.client_idle_limit = seconds("client-idle-limit", args.client_idle_limit)?;
+        cfg.client_dead_after = seconds("client-dead-after", args.client_dead_after)?;
+        let board = |which: &'static str, port: Option<String>, baud: u32| -> Result<Board> {
+            Ok(Board {
+                which,
+                kind: args.transport,
+                port: match port {
+                    Some(p) => p,
+                    None => default_port(args.transport, which)?,
+                },
+                baud,
+                backoff: Backoff::new(cfg.board_retry_initial, cfg.board_retry_max),
+                down_logged: false,
+            })
+        };
+        let mut boards = [
+            board("motor", args.motor_port.clone(), profile.serial.motor_baud)?,
+            board("sensor", args.sensor_port.clone(), profile.serial.sensor_baud)?,
+        ];
+        let clock = WallClock::start();
+        let mut links = Vec::new();
+        for b in &mut boards {
+            match b.open(StdDuration::from_secs(3)) {
+                Ok(link) => {
+                    tracing::info!(board = b.which, port = %b.port, baud = b.baud, "board link open");
+                    links.push(Some(link));
+                }
+                Err(e) if args.exit_on_link_loss => return Err(e),
+                Err(e) => {
+                    tracing::warn!(
+                        board = b.which,
+                        "{e:#}: retrying with back-off, moves dropped until it opens"
+                    );
+                    b.down_logged = true;
+                    b.backoff.failed(clock.now());
+                    links.push(None);
+                }
+            }
+        }
+        let sensor = links.pop().flatten();
+        let motor = links.pop().flatten();
+        let mut listener = TcpListenerLink::bind(args.listen.as_str())
+            .with_context(|| format!("cannot listen on {}", args.listen))?;
+        listener.set_keepalive(
+            cfg.client_dead_after.map(|d| KeepAlive::within(StdDuration::from_micros(d.total_micros()))),
+        );
+        tracing::info!(
+            listen = %listener.local_addr(),
+            robot = %profile.name,
+            cell_m = cfg.cell_size_m,
+            idle_limit_s = cfg.client_idle_limit.map(|d| d.as_secs_f64()),
+            dead_after_s = cfg.client_dead_after.map(|d| d.as_secs_f64()),
+            "carto ready: waiting for Cute"
+        );
+        let rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
+        Ok(Daemon { rt, clock, boards, signal, exit_on_link_loss: args.exit_on_link_loss })
     }
 
-    let clock = WallClock::start();
-    let now = || clock.now();
-    let mut rt = CartoRuntime::new(Carto::new(cfg), listener, motor, sensor);
-    let mut next_status = Instant::ZERO;
-    let mut failure = None;
-    while !stop.load(Ordering::SeqCst) {
-        let t = now();
-        let report = rt.step(t);
-        let lost: Vec<String> =
-            [(report.motor_lost, "motor", &motor_port), (report.sensor_lost, "sensor", &sensor_port)]
-                .into_iter()
-                .filter(|(lost, _, _)| *lost)
-                .map(|(_, which, port)| format!("the {which} board link ({port})"))
-                .collect();
-        if !lost.is_empty() {
-            failure = Some(format!("{} lost", lost.join(" and ")));
-            break;
+    /// Serves until a signal or a fatal error.
+    fn serve(&mut self) -> Ended {
+        let mut next_status = Instant::ZERO;
+        loop {
+            let sig = self.signal.load(Ordering::SeqCst);
+            if sig != 0 {
+                return Ended::Signal(sig);
+            }
+            let now = self.clock.now();
+            let report = self.rt.step(now);
+            for (lost, b) in [(report.motor_lost, 0), (report.sensor_lost, 1)] {
+                if !lost {
+                    continue;
+                }
+                let board = &mut self.boards[b];
+                if self.exit_on_link_loss {
+                    return Ended::Fatal(format!(
+                        "the {} board link ({}) was lost (--exit-on-link-loss)",
+                        board.which, board.port
+                    ));
+                }
+                board.backoff.reset();
+                board.backoff.failed(now);
+                board.down_logged = false;
+            }
+            self.reopen_boards(now);
+            if now >= next_status {
+                next_status = now + Duration::from_secs(10);
+                tracing::debug!(status = ?self.rt.carto().status(), stats = ?self.rt.carto().stats(), "status");
+            }
+            std::thread::sleep(StdDuration::from_millis(1));
         }
-        if t >= next_status {
-            next_status = t + robot_model::time::Duration::from_secs(10);
-            tracing::debug!(status = ?rt.carto().status(), stats = ?rt.carto().stats(), "status");
-        }
-        std::thread::sleep(StdDuration::from_millis(1));
     }
 
-    // Stop the motors before leaving, whatever the reason.
-    let mut flushed = rt.stop_motors(now());
-    for _ in 0..50 {
-        if flushed {
-            break;
+    fn reopen_boards(&mut self, now: Instant) {
+        for i in 0..2 {
+            let up = if i == 0 { self.rt.motor_up() } else { self.rt.sensor_up() };
+            let board = &mut self.boards[i];
+            if up || !board.backoff.due(now) {
+                continue;
+            }
+            match board.open(BOARD_CONNECT_TIMEOUT) {
+                Ok(link) => {
+                    tracing::info!(board = board.which, port = %board.port, "board link back: carrying on");
+                    board.backoff.reset();
+                    board.down_logged = false;
+                    let now = self.clock.now();
+                    if i == 0 {
+                        self.rt.set_motor_link(link, now);
+                    } else {
+                        self.rt.set_sensor_link(link, now);
+                    }
+                }
+                Err(e) => {
+                    if !board.down_logged {
+                        board.down_logged = true;
+                        tracing::warn!(
+                            board = board.which,
+                            max_wait_s = self.rt.carto().config().board_retry_max.as_secs_f64(),
+                            "{e:#}: retrying with back-off"
+                        );
+                    } else {
+                        tracing::debug!(board = board.which, "{e:#}");
+                    }
+                    board.backoff.failed(now);
+                }
+            }
         }
-        std::thread::sleep(StdDuration::from_millis(2));
-        flushed = rt.flush(now());
     }
-    if rt.motor_up() && !flushed {
-        tracing::warn!("the stop command could not be written completely");
-    }
-    tracing::info!(stats = ?rt.carto().stats(), "carto stopped");
-    match failure {
-        Some(f) => bail!(f),
-        None => Ok(()),
+
+    /// Stops the motors and waits (at most [`DRAIN_LIMIT`]) until the stop frame has left.
+    /// `emergency`: after a panic, bypass Carto's state machines and write a bare stop frame.
+    fn stop_motors(&mut self, emergency: bool) -> bool {
+        if !self.rt.motor_up() {
+            tracing::warn!("no motor board link: no stop frame can be sent");
+            return false;
+        }
+        let now = self.clock.now();
+        let attempt = std::panic::catch_unwind(AssertUnwindSafe(|| {
+            if emergency { self.rt.emergency_stop() } else { self.rt.stop_motors(now) }
+        }));
+        let mut flushed = match attempt {
+            Ok(done) => done,
+            // Carto's own stop path failed: the bare frame is the last resort.
+            Err(_) => self.rt.emergency_stop(),
+        };
+        let deadline = std::time::Instant::now() + DRAIN_LIMIT;
+        while !flushed && self.rt.motor_up() && std::time::Instant::now() < deadline {
+            std::thread::sleep(StdDuration::from_millis(2));
+            flushed = self.rt.flush(self.clock.now());
+        }
+        if !flushed {
+            tracing::warn!("the stop frame could not be written completely");
+        }
+        flushed
     }
 }

@@ -25,7 +25,8 @@
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
 //!
-//! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP or a disconnect drops it;
+//! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP, a disconnect or a lost
+//! board link ([`Pilot::on_link_lost`]) drops it;
 //! the stored pose changes only by `SEND_ROBOT_POSITION` or a completed move.
 //!
 //! ```
@@ -320,6 +321,21 @@ impl Pilot {
             self.counters.moves_failed += 1;
             self.end_task(now);
         }
+    }
+
+    /// A board link went away (unplugged, twin restarted): the motors stop and the current task,
+    /// the queued ones and the partial batch are dropped **without** `MOVE_DONE` — the moves did
+    /// not happen, so nothing claims they ended. Replies already earned (a `SET_ROBOT_POSITION`
+    /// of a completed FORWARD) stay. Cute's move timeout then reports the missing `MOVE_DONE`.
+    pub fn on_link_lost(&mut self, now: Instant, motor: &mut Motor, why: &str) {
+        if self.current.is_some() {
+            self.counters.moves_failed += 1;
+        }
+        let dropped = self.pending();
+        if self.current.is_some() || dropped > 0 {
+            tracing::warn!(why, dropped, "moves dropped, no MOVE_DONE: the robot did not make them");
+        }
+        self.drop_everything(now, motor);
     }
 
     fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {

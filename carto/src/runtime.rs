@@ -3,17 +3,24 @@
 //! Concept: generic over the transport traits, so the lockstep simulator (in-memory links, virtual
 //! clock) and the `carto` binary (TCP + serial ports, wall clock) run the very same code. One
 //! [`CartoRuntime::step`] at `now`:
-//! 1. accepts waiting clients — the first becomes the session, any other while one is connected is
-//!    accepted and dropped at once with a log line (Cute reconnects with back-off by itself);
+//! 1. accepts a waiting client when no session is open — one at a time: while a session is up the
+//!    next client **stays in the listen backlog**, as with the 2024 Carto, and is served as soon
+//!    as the session ends (both events logged once);
 //! 2. reads everything waiting on the client and both boards and feeds it to Carto;
 //! 3. polls Carto;
 //! 4. writes Carto's output, keeping what a link did not take for the next step;
-//! 5. closes the client after a fatal framing error.
+//! 5. closes the client after a fatal framing error, or after
+//!    [`crate::CartoConfig::client_idle_limit`] without a byte from it.
+//!
+//! A client's close is therefore always read before the next connection is looked at, so a
+//! client that reconnects at once is served, never reset.
 //!
 //! Errors: a client error or disconnect ends the session (`on_client_disconnected`: motors stop);
 //! a board link reporting [`transport::ErrorKind::Disconnected`] is dropped
-//! (`on_*_link_lost`: motors considered stopped, moves refused) and reported in
-//! [`StepReport`]; other board I/O errors are logged and counted and the link is kept.
+//! (`on_*_link_lost`: motors stopped, moves dropped without `MOVE_DONE`) and reported in
+//! [`StepReport`]; the owner may hand a reopened link back with
+//! [`CartoRuntime::set_motor_link`] / [`CartoRuntime::set_sensor_link`]. Other board I/O errors
+//! are counted and logged (rate-limited) and the link is kept.
 //!
 //! Invariants: nothing here reads a clock; unsent motor bytes never pile up beyond
 //! [`MAX_BOARD_BACKLOG`] (older drive frames are worthless, the next one supersedes them).
@@ -31,6 +38,8 @@ use robot_model::time::Instant;
 use transport::{Link, LinkError, Listener};
 
 use crate::Carto;
+use crate::motor::Drive;
+use crate::warn_limited;
 
 /// Unsent bytes kept per board link before the backlog is dropped.
 pub const MAX_BOARD_BACKLOG: usize = 4096;
@@ -44,8 +53,8 @@ const MAX_READS_PER_STEP: usize = 64;
 pub struct StepReport {
     /// A client was accepted (its address).
     pub accepted: Option<String>,
-    /// Clients refused because one was connected.
-    pub refused: u32,
+    /// Another client waits in the listen backlog while the session is open.
+    pub waiting: bool,
     /// The client session ended.
     pub client_closed: bool,
     /// The motor board link was lost in this step.
@@ -57,8 +66,8 @@ pub struct StepReport {
 /// Counters kept by the runtime.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RuntimeStats {
-    /// Clients refused (a session was open).
-    pub refused: u64,
+    /// Clients that had to wait in the backlog for a session to end.
+    pub waited: u64,
     /// Accept errors.
     pub accept_errors: u64,
     /// Board I/O errors other than disconnects.
@@ -83,6 +92,7 @@ struct Client<C> {
     link: C,
     peer: String,
     out: Vec<u8>,
+    last_rx: Instant,
 }
 
 /// Carto plus its links (see the module docs).
@@ -96,22 +106,54 @@ pub struct CartoRuntime<L: Listener, M: Link, S: Link> {
     sensor_out: Vec<u8>,
     stats: RuntimeStats,
     buf: Vec<u8>,
+    /// A client is known to wait in the backlog (logged once).
+    waiting: bool,
 }
 
 impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
     /// A runtime serving clients from `listener`, driving `motor` and `sensor`.
     pub fn new(carto: Carto, listener: L, motor: M, sensor: S) -> Self {
-        CartoRuntime {
+        Self::with_links(carto, listener, Some(motor), Some(sensor), Instant::ZERO)
+    }
+
+    /// A runtime whose board links may be missing at start (`None`: not open yet; Carto is told
+    /// at `now` that the link is down, and moves are refused until it is handed over).
+    pub fn with_links(carto: Carto, listener: L, motor: Option<M>, sensor: Option<S>, now: Instant) -> Self {
+        let mut rt = CartoRuntime {
             carto,
             listener,
             client: None,
-            motor: Some(motor),
-            sensor: Some(sensor),
+            motor: None,
+            sensor: None,
             motor_out: Vec::new(),
             sensor_out: Vec::new(),
             stats: RuntimeStats::default(),
             buf: vec![0; READ_CHUNK],
+            waiting: false,
+        };
+        match motor {
+            Some(m) => rt.motor = Some(m),
+            None => rt.carto.on_motor_link_lost(now),
         }
+        match sensor {
+            Some(s) => rt.sensor = Some(s),
+            None => rt.carto.on_sensor_link_lost(now),
+        }
+        rt
+    }
+
+    /// Hands over a (re)opened motor board link: Carto sends it a stop frame first.
+    pub fn set_motor_link(&mut self, link: M, now: Instant) {
+        self.motor = Some(link);
+        self.motor_out.clear();
+        self.carto.on_motor_link_up(now);
+    }
+
+    /// Hands over a (re)opened sensor board link.
+    pub fn set_sensor_link(&mut self, link: S, now: Instant) {
+        self.sensor = Some(link);
+        self.sensor_out.clear();
+        self.carto.on_sensor_link_up(now);
     }
 
     /// The controller.
@@ -159,6 +201,12 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         let mut report = StepReport::default();
         self.accept(now, &mut report);
         self.read_client(now, &mut report);
+        if let (Some(limit), Some(c)) = (self.carto.config().client_idle_limit, self.client.as_ref())
+            && now.saturating_since(c.last_rx) >= limit
+        {
+            let why = format!("idle limit: no byte for {:.1} s", limit.as_secs_f64());
+            self.close_client(now, &why, &mut report);
+        }
         self.read_boards(now, &mut report);
         self.carto.poll(now);
         self.write_all(now, &mut report);
@@ -178,6 +226,22 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         self.carto.on_client_disconnected(now);
         let mut report = StepReport::default();
         self.write_all(now, &mut report);
+        self.motor_out.is_empty()
+    }
+
+    /// The last resort (a panic, an error nothing else can handle): forgets everything queued for
+    /// the motor board and writes a bare stop frame, without going through Carto's state
+    /// machines. Returns whether the whole frame was written; the caller retries with
+    /// [`CartoRuntime::flush`].
+    pub fn emergency_stop(&mut self) -> bool {
+        let Some(link) = self.motor.as_mut() else {
+            return false;
+        };
+        self.motor_out = crate::wire::encode_drive(Drive::STOP, self.carto.config().speed_ratio);
+        match write_some(link, &mut self.motor_out) {
+            Ok(n) => self.stats.motor_bytes_out += n as u64,
+            Err(_) => self.stats.board_io_errors += 1,
+        }
         self.motor_out.is_empty()
     }
 
@@ -203,26 +267,29 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
     }
 
     fn accept(&mut self, now: Instant, report: &mut StepReport) {
-        for _ in 0..16 {
-            match self.listener.accept() {
-                Ok(Some((link, peer))) => {
-                    if let Some(current) = &self.client {
-                        self.stats.refused += 1;
-                        report.refused += 1;
-                        tracing::warn!(peer = %peer, current = %current.peer, "second client refused: one at a time");
-                        drop(link);
-                    } else {
-                        self.carto.on_client_connected(now, &peer);
-                        report.accepted = Some(peer.clone());
-                        self.client = Some(Client { link, peer, out: Vec::new() });
-                    }
+        if let Some(current) = &self.client {
+            // One session at a time: the next client stays in the backlog until this one leaves.
+            if !self.waiting && self.listener.has_pending() {
+                self.waiting = true;
+                self.stats.waited += 1;
+                tracing::info!(current = %current.peer, "another client waits in the backlog: served when this session ends");
+            }
+            report.waiting = self.waiting;
+            return;
+        }
+        match self.listener.accept() {
+            Ok(Some((link, peer))) => {
+                if std::mem::take(&mut self.waiting) {
+                    tracing::info!(peer = %peer, "serving the client that waited in the backlog");
                 }
-                Ok(None) => break,
-                Err(e) => {
-                    self.stats.accept_errors += 1;
-                    tracing::warn!(error = %e, kind = ?e.kind(), "accept failed");
-                    break;
-                }
+                self.carto.on_client_connected(now, &peer);
+                report.accepted = Some(peer.clone());
+                self.client = Some(Client { link, peer, out: Vec::new(), last_rx: now });
+            }
+            Ok(None) => {}
+            Err(e) => {
+                self.stats.accept_errors += 1;
+                warn_limited!(self.carto.limiter(), now, "accept failed", error = %e, kind = ?e.kind(), "accept failed");
             }
         }
     }
@@ -237,6 +304,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 Ok(0) => break,
                 Ok(n) => {
                     self.stats.client_bytes_in += n as u64;
+                    client.last_rx = now;
                     self.carto.on_client_bytes(now, &self.buf[..n]);
                     if self.carto.should_close_client() {
                         break;
@@ -264,7 +332,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             }) {
                 ReadEnd::Ok => {}
                 ReadEnd::Lost(e) => {
-                    tracing::error!(error = %e, "motor board link lost");
+                    tracing::error!(error = %e, "motor board link lost: motors stopped, moves dropped");
                     self.motor = None;
                     self.motor_out.clear();
                     report.motor_lost = true;
@@ -272,7 +340,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 }
                 ReadEnd::Error(e) => {
                     self.stats.board_io_errors += 1;
-                    tracing::warn!(error = %e, "motor board read error");
+                    warn_limited!(self.carto.limiter(), now, "motor board read error", error = %e, "motor board read error");
                 }
             }
         }
@@ -282,7 +350,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             }) {
                 ReadEnd::Ok => {}
                 ReadEnd::Lost(e) => {
-                    tracing::error!(error = %e, "sensor board link lost");
+                    tracing::error!(error = %e, "sensor board link lost: motors stopped, moves dropped");
                     self.sensor = None;
                     self.sensor_out.clear();
                     report.sensor_lost = true;
@@ -290,7 +358,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 }
                 ReadEnd::Error(e) => {
                     self.stats.board_io_errors += 1;
-                    tracing::warn!(error = %e, "sensor board read error");
+                    warn_limited!(self.carto.limiter(), now, "sensor board read error", error = %e, "sensor board read error");
                 }
             }
         }
@@ -323,7 +391,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             match push(link, &mut self.motor_out, bytes, &mut self.stats) {
                 Ok(n) => self.stats.motor_bytes_out += n as u64,
                 Err(e) if e.kind() == transport::ErrorKind::Disconnected => {
-                    tracing::error!(error = %e, "motor board link lost");
+                    tracing::error!(error = %e, "motor board link lost: motors stopped, moves dropped");
                     self.motor = None;
                     self.motor_out.clear();
                     report.motor_lost = true;
@@ -331,7 +399,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 }
                 Err(e) => {
                     self.stats.board_io_errors += 1;
-                    tracing::warn!(error = %e, "motor board write error");
+                    warn_limited!(self.carto.limiter(), now, "motor board write error", error = %e, "motor board write error");
                 }
             }
         }
@@ -342,7 +410,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             match push(link, &mut self.sensor_out, bytes, &mut self.stats) {
                 Ok(n) => self.stats.sensor_bytes_out += n as u64,
                 Err(e) if e.kind() == transport::ErrorKind::Disconnected => {
-                    tracing::error!(error = %e, "sensor board link lost");
+                    tracing::error!(error = %e, "sensor board link lost: motors stopped, moves dropped");
                     self.sensor = None;
                     self.sensor_out.clear();
                     report.sensor_lost = true;
@@ -350,7 +418,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 }
                 Err(e) => {
                     self.stats.board_io_errors += 1;
-                    tracing::warn!(error = %e, "sensor board write error");
+                    warn_limited!(self.carto.limiter(), now, "sensor board write error", error = %e, "sensor board write error");
                 }
             }
         }
@@ -407,7 +475,7 @@ fn push<K: Link>(
     if pending.len() + new.len() > MAX_BOARD_BACKLOG {
         // Stale commands are worse than none: keep only the newest output.
         stats.board_bytes_dropped += pending.len() as u64;
-        tracing::warn!(dropped = pending.len(), "board link backlog dropped");
+        tracing::debug!(dropped = pending.len(), "board link backlog dropped");
         pending.clear();
     }
     pending.extend(new);

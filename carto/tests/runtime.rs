@@ -1,4 +1,4 @@
-//! CartoRuntime over transport's in-memory links: accept/refuse, closing, board loss, and a full
+//! CartoRuntime over transport's in-memory links: one client at a time, idle limit, closing, board loss, and a full
 //! FORWARD through baud-timed serial links.
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
@@ -83,28 +83,64 @@ fn pose_bytes() -> Vec<u8> {
 }
 
 #[test]
-fn second_client_is_refused_while_one_is_connected() {
+fn issue_14_second_client_waits_in_the_backlog_and_is_served_when_the_first_leaves() {
     let mut w = World::new(false);
     let mut first = w.connector.connect().unwrap();
     let report = w.tick();
     assert_eq!(report.accepted.as_deref(), Some("mem:1"));
     let mut second = w.connector.connect().unwrap();
     let report = w.tick();
-    assert_eq!(report.refused, 1);
+    assert!(report.waiting && report.accepted.is_none());
+    // The second client is neither accepted nor closed: it can already send its request.
+    second.write(&pose_bytes()).unwrap();
     let mut buf = [0u8; 8];
-    assert!(second.read(&mut buf).unwrap_err().is_disconnected(), "refused client not closed");
+    assert_eq!(second.read(&mut buf).unwrap(), 0);
     // The first session is untouched.
     first.write(&pose_bytes()).unwrap();
     w.run_ms(2);
     let mut dec = protocol::link::Decoder::default();
     assert_eq!(read_replies(&mut first, &mut dec), vec![GuiMessage::RobotPositionReceived]);
-    assert_eq!(w.rt.stats().refused, 1);
-    // After the first leaves, a new one is accepted.
+    assert_eq!(w.rt.stats().waited, 1);
+    // The first leaves: its close is read, then the waiting client is served.
     drop(first);
-    w.run_ms(2);
-    assert!(!w.rt.has_client());
-    let _third = w.connector.connect().unwrap();
-    assert!(w.tick().accepted.is_some());
+    let mut accepted = None;
+    for _ in 0..5 {
+        accepted = accepted.or(w.tick().accepted);
+    }
+    assert_eq!(accepted.as_deref(), Some("mem:2"));
+    let mut dec = protocol::link::Decoder::default();
+    assert_eq!(read_replies(&mut second, &mut dec), vec![GuiMessage::RobotPositionReceived]);
+}
+
+#[test]
+fn issue_14_idle_client_is_closed_and_the_next_served() {
+    let clock = MockClock::new();
+    let (listener, mut connector) = mem_listener(None, clock.clone());
+    let (m_carto, _m_board) = MemLink::pair(None, clock.clone());
+    let (s_carto, _s_board) = MemLink::pair(None, clock.clone());
+    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..CartoConfig::default() };
+    let mut rt = CartoRuntime::new(Carto::new(cfg), listener, m_carto, s_carto);
+    let mut silent = connector.connect().unwrap();
+    let mut now = Instant::ZERO;
+    let mut closed_at = None;
+    let mut next = None;
+    while now < Instant::from_millis(5000) {
+        now += Duration::from_millis(10);
+        let r = rt.step(now);
+        if r.client_closed {
+            closed_at = Some(now);
+        }
+        if closed_at.is_some() && next.is_none() {
+            next = Some(connector.connect().unwrap());
+        }
+        if r.accepted.as_deref() == Some("mem:2") {
+            break;
+        }
+    }
+    assert_eq!(closed_at, Some(Instant::from_millis(2010)));
+    assert!(rt.has_client(), "the next client was not served");
+    let mut buf = [0u8; 8];
+    assert!(silent.read(&mut buf).unwrap_err().is_disconnected());
 }
 
 #[test]
@@ -191,8 +227,9 @@ fn motor_board_link_loss_is_reported_and_moves_are_refused() {
         .unwrap();
     w.run_ms(5);
     let mut dec = protocol::link::Decoder::default();
-    assert_eq!(read_replies(&mut c, &mut dec), vec![GuiMessage::RobotPositionReceived, GuiMessage::MoveDone]);
-    assert_eq!(w.rt.carto().stats().moves_failed, 1);
+    // The position is acknowledged; the move did not happen, so no MOVE_DONE says it ended.
+    assert_eq!(read_replies(&mut c, &mut dec), vec![GuiMessage::RobotPositionReceived]);
+    assert_eq!(w.rt.carto().stats().moves_refused, 1);
 }
 
 #[test]

@@ -303,13 +303,22 @@ impl Scenario {
     /// Parses and validates a scenario; `file` is used in error messages.
     pub fn from_ron_str(text: &str, file: &str) -> Result<Scenario, ScenarioError> {
         let scenario: Scenario = source::parse(text, file)?;
-        // The one check on a value that needs two of its fields.
+        // Checks that need two values: a segment's ends, an obstacle against the room.
+        let room = values::bounds(&scenario.room);
         for (i, o) in scenario.obstacles.iter().enumerate() {
+            let path = [field("obstacles"), Key::Index(i)];
             if let Obstacle::Segment { from, to } = o
                 && from == to
             {
-                let path = [field("obstacles"), Key::Index(i)];
                 let message = format!("obstacles[{i}]: a segment needs two different ends");
+                return Err(ScenarioError::at(file, text, &path, message));
+            }
+            let b = o.bounds();
+            if b.0 > room.2 || b.2 < room.0 || b.1 > room.3 || b.3 < room.1 {
+                let message = format!(
+                    "obstacles[{i}]: lies outside the room (x {:.2}..{:.2}, y {:.2}..{:.2} m; the room spans x {:.2}..{:.2}, y {:.2}..{:.2} m)",
+                    b.0, b.2, b.1, b.3, room.0, room.2, room.1, room.3
+                );
                 return Err(ScenarioError::at(file, text, &path, message));
             }
         }

@@ -111,3 +111,23 @@ fn start_cell_outside_the_room_is_rejected() {
     assert_eq!(err.line, 4, "{err}");
     assert!(err.message.contains("start cell"), "{err}");
 }
+
+#[test]
+fn issue_15_absurd_coordinates_and_obstacles_outside_the_room_are_errors_where_written() {
+    // x = 2^32 m: a number, finite, and absurd.
+    let e = rejects("  obstacles: [Circle(center: (4294967296.0, 0.5), radius: 0.1)],");
+    assert_eq!((e.line, e.column), (6, 30), "{e}");
+    assert!(e.message.starts_with("obstacles[0].center:") && e.message.contains("1000"), "{e}");
+    let e = rejects("  obstacles: [Box(center: (0.5, 0.5), size: (1e9, 0.2))],");
+    assert_eq!(e.line, 6, "{e}");
+    assert!(e.message.starts_with("obstacles[0].size:"), "{e}");
+    // In range, but wholly outside the 1 m room: the error points at the obstacle.
+    let e = rejects(
+        "  obstacles: [Circle(center: (0.5, 0.5), radius: 0.1),\n    Box(center: (40.0, 0.5), size: (0.2, 0.2))],",
+    );
+    assert_eq!((e.line, e.column), (7, 5), "{e}");
+    assert!(e.message.contains("obstacles[1]: lies outside the room"), "{e}");
+    // Touching the wall from outside still overlaps the room: allowed (half-pillars in walls).
+    let text = "Scenario(\n  name: \"x\",\n  room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)],\n  obstacles: [Circle(center: (1.05, 0.5), radius: 0.1)],\n  start: (row: 0, col: 0, heading: East),\n)";
+    assert!(Scenario::from_ron_str(text, "x.ron").is_ok());
+}

@@ -284,14 +284,16 @@ fn a_turn_right_after_a_stop_mid_move_keeps_the_coasting_in_the_odometry() {
 }
 
 #[test]
-fn a_second_client_is_refused_and_a_disconnect_stops_the_motors() {
+fn issue_14_a_second_client_waits_and_a_disconnect_stops_the_motors() {
     let mut rig = rig("");
     let mut first = rig.ready_client();
     let mut second = rig.connect();
+    second.send(GuiMessage::SendRobotPosition { x: 2, y: 2, direction: Direction::East });
     rig.run(0.1);
-    assert!(!second.poll(), "the second client should have been closed");
+    assert!(second.poll(), "the second client waits: it must not be closed");
+    assert!(second.received.is_empty(), "the second client is not served yet: {:?}", second.received);
     assert!(first.poll(), "the first client must stay connected");
-    assert!(rig.carto.stats().refused >= 1);
+    assert_eq!(rig.carto.stats().waited, 1);
 
     first.send(GuiMessage::SendMoveCartography { command: Command::Forward });
     rig.run(0.8);
@@ -299,10 +301,10 @@ fn a_second_client_is_refused_and_a_disconnect_stops_the_motors() {
     drop(first);
     rig.run(0.1);
     assert!(rig.wheels_commanded_to_zero(), "a disconnect stops the motors");
-    // The server waits for the next client and serves it.
-    let mut third = rig.ready_client();
-    third.send(GuiMessage::SendMoveCartography { command: Command::Left });
-    rig.run_until(&mut third, 10.0, |r| r.contains(&GuiMessage::MoveDone));
+    // The client that waited is served now, its early request first.
+    rig.run_until(&mut second, 2.0, |r| r.contains(&GuiMessage::RobotPositionReceived));
+    second.send(GuiMessage::SendMoveCartography { command: Command::Left });
+    rig.run_until(&mut second, 10.0, |r| r.contains(&GuiMessage::MoveDone));
 }
 
 #[test]

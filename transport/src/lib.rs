@@ -23,5 +23,5 @@ pub use mem::{
 pub use pty::{PtyClient, PtyLink};
 #[cfg(unix)]
 pub use serial::{SerialLink, SerialLinkBuilder};
-pub use tcp::{TcpConnector, TcpLink, TcpListenerLink};
+pub use tcp::{KeepAlive, TcpConnector, TcpLink, TcpListenerLink};
 pub use tracer::{Direction, TraceHandle, TraceRecord, TraceTotals, Tracer};

@@ -186,6 +186,12 @@ pub trait Listener {
 
     /// A newly connected peer and a printable address if one is waiting, `Ok(None)` otherwise.
     fn accept(&mut self) -> Result<Option<(Self::Link, String)>, Self::Error>;
+
+    /// Whether a peer is waiting to be accepted, without accepting it (it stays in the backlog).
+    /// Implementations that cannot tell say `false`.
+    fn has_pending(&mut self) -> bool {
+        false
+    }
 }
 
 /// The client side of a connection-oriented link (Cute's socket): opens a new link on demand, so

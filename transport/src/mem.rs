@@ -393,6 +393,10 @@ impl Listener for MemListener {
     fn accept(&mut self) -> Result<Option<(MemLink, String)>, Error> {
         Ok(lock_listener(&self.shared).pending.pop_front())
     }
+
+    fn has_pending(&mut self) -> bool {
+        !lock_listener(&self.shared).pending.is_empty()
+    }
 }
 
 impl Connector for MemConnector {

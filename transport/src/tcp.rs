@@ -3,6 +3,9 @@
 //! Every socket is non-blocking with `TCP_NODELAY` (frames are small and latency matters more
 //! than packet count). [`TcpLink::connect`] and [`TcpConnector`] wait at most a short connect
 //! timeout (default [`DEFAULT_CONNECT_TIMEOUT`]); [`TcpListenerLink::accept`] never waits.
+//! [`TcpListenerLink::set_keepalive`] makes every accepted socket probe a silent peer
+//! ([`KeepAlive`]: TCP keepalive plus `TCP_USER_TIMEOUT` on Linux), so a peer that vanished
+//! without closing (unplugged, powered off) ends up `Disconnected` within a bounded time.
 //!
 //! Invariants:
 //! - `read` returns `Ok(0)` when nothing has arrived; the peer closing (end of stream) or
@@ -33,6 +36,36 @@ use crate::link::{Connector, Error, ErrorKind, Link, Listener};
 
 /// How long a connect waits for the peer before giving up.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_millis(500);
+
+/// How a socket notices a peer that vanished without closing: after `idle` without traffic the
+/// kernel sends up to `retries` keepalive probes `interval` apart; unanswered, the connection
+/// fails (`Disconnected` on the next read). Unacknowledged outgoing data fails it after
+/// [`KeepAlive::dead_after`] too (`TCP_USER_TIMEOUT`, Linux only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct KeepAlive {
+    /// Silence before the first probe.
+    pub idle: Duration,
+    /// Time between probes.
+    pub interval: Duration,
+    /// Unanswered probes before the connection fails.
+    pub retries: u32,
+}
+
+impl KeepAlive {
+    /// Settings that declare a silent, unresponsive peer dead after about `limit`: a third of it
+    /// idle, then 5 probes over the remaining two thirds (at least 1 s each).
+    pub fn within(limit: Duration) -> KeepAlive {
+        let secs = limit.as_secs().max(3);
+        let idle = Duration::from_secs((secs / 3).max(1));
+        let interval = Duration::from_secs(((secs - secs / 3) / 5).max(1));
+        KeepAlive { idle, interval, retries: 5 }
+    }
+
+    /// Silence after which the peer is declared dead: `idle + retries × interval`.
+    pub fn dead_after(&self) -> Duration {
+        self.idle + self.interval * self.retries
+    }
+}
 
 /// A connected, non-blocking TCP byte stream.
 #[derive(Debug)]
@@ -69,6 +102,24 @@ impl TcpLink {
         stream.set_nonblocking(true).map_err(|e| Error::from_io(&e, ctx()))?;
         stream.set_nodelay(true).map_err(|e| Error::from_io(&e, ctx()))?;
         Ok(TcpLink { stream, peer, closed: false })
+    }
+
+    /// Turns on TCP keepalive (and, on Linux, `TCP_USER_TIMEOUT`) with `settings`.
+    pub fn set_keepalive(&self, settings: &KeepAlive) -> Result<(), Error> {
+        let sock = socket2::SockRef::from(&self.stream);
+        let ctx = || format!("tcp {}: setting keepalive", self.peer);
+        let params = socket2::TcpKeepalive::new().with_time(settings.idle);
+        #[cfg(any(
+            target_os = "linux",
+            target_os = "android",
+            target_vendor = "apple",
+            target_os = "freebsd"
+        ))]
+        let params = params.with_interval(settings.interval).with_retries(settings.retries);
+        sock.set_tcp_keepalive(&params).map_err(|e| Error::from_io(&e, ctx()))?;
+        #[cfg(any(target_os = "linux", target_os = "android"))]
+        sock.set_tcp_user_timeout(Some(settings.dead_after())).map_err(|e| Error::from_io(&e, ctx()))?;
+        Ok(())
     }
 
     /// The peer's address, as text.
@@ -170,6 +221,7 @@ impl Connector for TcpConnector {
 pub struct TcpListenerLink {
     listener: TcpListener,
     local: SocketAddr,
+    keepalive: Option<KeepAlive>,
 }
 
 impl TcpListenerLink {
@@ -180,12 +232,17 @@ impl TcpListenerLink {
         listener
             .set_nonblocking(true)
             .map_err(|e| Error::from_io(&e, format!("tcp {local}: non-blocking")))?;
-        Ok(TcpListenerLink { listener, local })
+        Ok(TcpListenerLink { listener, local, keepalive: None })
     }
 
     /// The address it listens on.
     pub fn local_addr(&self) -> SocketAddr {
         self.local
+    }
+
+    /// Keepalive settings for every socket accepted from now on (`None`: the system's, i.e. off).
+    pub fn set_keepalive(&mut self, keepalive: Option<KeepAlive>) {
+        self.keepalive = keepalive;
     }
 }
 
@@ -195,7 +252,13 @@ impl Listener for TcpListenerLink {
 
     fn accept(&mut self) -> Result<Option<(TcpLink, String)>, Error> {
         match self.listener.accept() {
-            Ok((stream, peer)) => Ok(Some((TcpLink::from_stream(stream)?, peer.to_string()))),
+            Ok((stream, peer)) => {
+                let link = TcpLink::from_stream(stream)?;
+                if let Some(k) = &self.keepalive {
+                    link.set_keepalive(k)?;
+                }
+                Ok(Some((link, peer.to_string())))
+            }
             Err(e)
                 if matches!(
                     e.kind(),
@@ -206,6 +269,14 @@ impl Listener for TcpListenerLink {
             }
             Err(e) => Err(Error::from_io(&e, format!("tcp {}: accept", self.local))),
         }
+    }
+
+    #[cfg(unix)]
+    fn has_pending(&mut self) -> bool {
+        use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+        use std::os::fd::AsFd;
+        let mut fds = [PollFd::new(self.listener.as_fd(), PollFlags::POLLIN)];
+        matches!(poll(&mut fds, PollTimeout::ZERO), Ok(n) if n > 0)
     }
 }
 
@@ -220,6 +291,33 @@ mod tests {
         let err = connector.connect().unwrap_err();
         assert_eq!(err.kind(), ErrorKind::Disconnected);
         assert!(err.to_string().contains(&port.to_string()), "{err}");
+    }
+
+    #[test]
+    fn keepalive_within_15_s() {
+        let k = KeepAlive::within(Duration::from_secs(15));
+        assert_eq!((k.idle, k.interval, k.retries), (Duration::from_secs(5), Duration::from_secs(2), 5));
+        assert_eq!(k.dead_after(), Duration::from_secs(15));
+    }
+
+    #[test]
+    fn issue_14_accepted_sockets_get_keepalive_and_pending_peers_wait() {
+        let mut server = TcpListenerLink::bind("127.0.0.1:0").unwrap();
+        server.set_keepalive(Some(KeepAlive::within(Duration::from_secs(15))));
+        assert!(!server.has_pending());
+        let _client = TcpLink::connect(server.local_addr()).unwrap();
+        let deadline = std::time::Instant::now() + Duration::from_secs(5);
+        while !server.has_pending() {
+            assert!(std::time::Instant::now() < deadline, "the connection never showed as pending");
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        let (link, _) = server.accept().unwrap().unwrap();
+        let sock = socket2::SockRef::from(&link.stream);
+        assert!(sock.keepalive().unwrap());
+        assert_eq!(sock.tcp_keepalive_time().unwrap(), Duration::from_secs(5));
+        #[cfg(target_os = "linux")]
+        assert_eq!(sock.tcp_user_timeout().unwrap(), Some(Duration::from_secs(15)));
+        assert!(!server.has_pending());
     }
 
     #[test]

@@ -11,6 +11,8 @@ use rapier2d::parry::math::Vector;
 use rapier2d::parry::shape::ConvexPolygon;
 use serde::de::{Deserialize, Deserializer, Error};
 
+use super::Obstacle;
+
 /// Reads a `T` and keeps it when `ok(&value)`, else fails with `message`.
 fn checked<'de, T, D>(d: D, ok: impl FnOnce(&T) -> bool, message: &str) -> Result<T, D::Error>
 where
@@ -21,12 +23,24 @@ where
     if ok(&value) { Ok(value) } else { Err(D::Error::custom(message)) }
 }
 
+/// Largest coordinate or length a scenario may hold, metres: far beyond any room the link
+/// protocol's one-byte cells can address, small enough to catch a typo such as 4294967296.
+pub const MAX_COORD_M: f32 = 1000.0;
+
 fn finite2(p: &(f32, f32)) -> bool {
-    p.0.is_finite() && p.1.is_finite()
+    in_range(p.0) && in_range(p.1)
+}
+
+fn in_range(v: f32) -> bool {
+    v.is_finite() && v.abs() <= MAX_COORD_M
 }
 
 fn positive(v: f32) -> bool {
     v.is_finite() && v > 0.0
+}
+
+fn positive_m(v: f32) -> bool {
+    in_range(v) && v > 0.0
 }
 
 /// Signed area of a polygon (positive when counter-clockwise).
@@ -57,7 +71,7 @@ pub fn room<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(f32, f32)>, D::Error
         return Err(D::Error::custom("room needs at least 3 corners"));
     }
     if !room.iter().all(finite2) {
-        return Err(D::Error::custom("room corners must be finite numbers"));
+        return Err(D::Error::custom("room corners must be finite numbers within ±1000 m"));
     }
     if polygon_area(&room).abs() < 1e-6 {
         return Err(D::Error::custom("room polygon has no area"));
@@ -85,17 +99,21 @@ pub fn step_ms<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
 
 /// A point, metres.
 pub fn point<'de, D: Deserializer<'de>>(d: D) -> Result<(f32, f32), D::Error> {
-    checked(d, finite2, "a point is two finite numbers (metres)")
+    checked(d, finite2, "a point is two finite numbers within ±1000 m (metres)")
 }
 
 /// A width and a height, metres.
 pub fn size<'de, D: Deserializer<'de>>(d: D) -> Result<(f32, f32), D::Error> {
-    checked(d, |s: &(f32, f32)| positive(s.0) && positive(s.1), "a size is two positive numbers (metres)")
+    checked(
+        d,
+        |s: &(f32, f32)| positive_m(s.0) && positive_m(s.1),
+        "a size is two positive numbers up to 1000 (metres)",
+    )
 }
 
 /// A length, metres.
 pub fn length<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
-    checked(d, |v: &f32| positive(*v), "a length is a positive number of metres")
+    checked(d, |v: &f32| positive_m(*v), "a length is a positive number of metres, up to 1000")
 }
 
 /// Any finite number (an angle).
@@ -111,7 +129,7 @@ pub fn convex_points<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<(f32, f32)>,
             let pts: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
             points.iter().all(finite2) && ConvexPolygon::from_convex_hull(&pts).is_some()
         },
-        "a polygon needs finite corners that do not all lie on one line",
+        "a polygon needs finite corners within ±1000 m that do not all lie on one line",
     )
 }
 
@@ -147,4 +165,27 @@ pub fn fraction<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error
 /// A latency, milliseconds: zero or more.
 pub fn latency_ms<'de, D: Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
     checked(d, |v: &f32| v.is_finite() && *v >= 0.0, "latency_ms must be zero or positive")
+}
+
+impl Obstacle {
+    /// A box around the obstacle (min x, min y, max x, max y), metres; a rotated box's is
+    /// the box around its circumscribed circle.
+    pub fn bounds(&self) -> (f32, f32, f32, f32) {
+        match self {
+            Obstacle::Box { center: (x, y), size: (w, h), .. } => {
+                let r = 0.5 * w.hypot(*h);
+                (x - r, y - r, x + r, y + r)
+            }
+            Obstacle::Circle { center: (x, y), radius: r } => (x - r, y - r, x + r, y + r),
+            Obstacle::Segment { from, to } => bounds(&[*from, *to]),
+            Obstacle::Polygon { points } => bounds(points),
+        }
+    }
+}
+
+/// The box around `points` (min x, min y, max x, max y).
+pub fn bounds(points: &[(f32, f32)]) -> (f32, f32, f32, f32) {
+    points.iter().fold((f32::MAX, f32::MAX, f32::MIN, f32::MIN), |b, &(x, y)| {
+        (b.0.min(x), b.1.min(y), b.2.max(x), b.3.max(y))
+    })
 }
