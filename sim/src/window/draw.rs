@@ -218,15 +218,29 @@ pub(super) fn draw_world(sim: Res<Sim>, window: Single<&Window, With<PrimaryWind
         Color::srgb(0.75, 0.3, 0.75),
     );
 
-    // Sonar: the rays of the last measurement and the cone through their ends.
-    let rays = run.body().last_rays();
-    for r in rays {
-        let color = if r.echo { Color::srgb(0.0, 0.75, 0.55) } else { Color::srgba(0.9, 0.3, 0.3, 0.6) };
-        gizmos.line_2d(w(r.from.0, r.from.1), w(r.to.0, r.to.1), color);
-    }
-    if rays.len() >= 2 {
-        let cone = Color::srgba(0.0, 0.6, 0.45, 0.5);
-        gizmos.linestrip_2d(rays.iter().map(|r| w(r.to.0, r.to.1)), cone);
+    // Sonar: the rays of the last measurement, each ending where it hit. A heard ray is drawn
+    // to its echo point with a dot there; a ray lost to incidence faintly, with a cross at the
+    // surface it glanced off; a ray that hit nothing within range, dotted to its range.
+    for r in run.body().last_rays() {
+        let (from, to) = (w(r.from.0, r.from.1), w(r.to.0, r.to.1));
+        if r.echo {
+            let heard = Color::srgb(0.0, 0.75, 0.55);
+            gizmos.line_2d(from, to, heard);
+            gizmos.circle_2d(to, 3.0, heard);
+        } else if r.hit {
+            let lost = Color::srgba(0.9, 0.3, 0.3, 0.7);
+            gizmos.line_2d(from, to, Color::srgba(0.9, 0.3, 0.3, 0.35));
+            gizmos.line_2d(to + Vec2::new(-4.0, -4.0), to + Vec2::new(4.0, 4.0), lost);
+            gizmos.line_2d(to + Vec2::new(-4.0, 4.0), to + Vec2::new(4.0, -4.0), lost);
+        } else {
+            let miss = Color::srgba(0.6, 0.6, 0.6, 0.5);
+            let n = 12;
+            for i in (0..n).step_by(2) {
+                let a = from.lerp(to, i as f32 / n as f32);
+                let b = from.lerp(to, (i + 1) as f32 / n as f32);
+                gizmos.line_2d(a, b, miss);
+            }
+        }
     }
 
     // Heading arrow and bumper.
