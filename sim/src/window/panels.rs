@@ -88,7 +88,11 @@ pub(super) fn time_controls(
                     egui::Color32::from_rgb(250, 130, 110)
                 };
                 match state {
-                    ScriptState::Done(at) => format!("at {:.1} s: {verdict}", at.as_secs_f64()),
+                    ScriptState::Done(at) => format!("script done at {:.1} s: {verdict}", at.as_secs_f64()),
+                    ScriptState::NoScript => format!("no script: you drive from the start ({verdict})"),
+                    ScriptState::LimitPassed { limit, .. } => {
+                        format!("at the headless limit {:.0} s: {verdict}", limit.as_secs_f64())
+                    }
                     _ => verdict,
                 }
             }
