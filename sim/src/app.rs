@@ -44,7 +44,9 @@ pub enum Mode {
     /// No window: as fast as the CPU allows.
     Headless,
     /// One window, the world beside Cute's map, paced to wall time × a speed factor by the
-    /// window's `pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing).
+    /// window's `pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing). The run is
+    /// made [`Lockstep::interactive`]: the script plays, then the user drives until the window
+    /// is closed.
     #[cfg(feature = "window")]
     Window,
 }

@@ -64,23 +64,47 @@ impl Drop for Window {
 }
 
 impl Window {
-    /// `explobot window ARGS --status-file …` with its output in `dir`.
+    /// `explobot window ARGS --status-file …` with its output in `dir`, up and writing its
+    /// status. Xvfb resets itself when its last client leaves (the previous window, an xdotool
+    /// call), and refuses connections meanwhile: a window that could not open the display is
+    /// started again, a few times.
     fn open(name: &str, args: &[&str]) -> Window {
         let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("window-clicks-{name}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let status = dir.join("status.json");
-        let child = Command::new(env!("CARGO_BIN_EXE_explobot"))
-            .arg("window")
-            .args(args)
-            .arg("--status-file")
-            .arg(&status)
-            .stdin(Stdio::null())
-            .stdout(std::fs::File::create(dir.join("stdout.txt")).unwrap())
-            .stderr(std::fs::File::create(dir.join("stderr.txt")).unwrap())
-            .spawn()
-            .unwrap();
-        Window { child, dir, status, id: None }
+        for attempt in 1..=4 {
+            let _ = std::fs::remove_dir_all(&dir);
+            std::fs::create_dir_all(&dir).unwrap();
+            let status = dir.join("status.json");
+            let child = Command::new(env!("CARGO_BIN_EXE_explobot"))
+                .arg("window")
+                .args(args)
+                .arg("--status-file")
+                .arg(&status)
+                .stdin(Stdio::null())
+                .stdout(std::fs::File::create(dir.join("stdout.txt")).unwrap())
+                .stderr(std::fs::File::create(dir.join("stderr.txt")).unwrap())
+                .spawn()
+                .unwrap();
+            let mut w = Window { child, dir: dir.clone(), status, id: None };
+            let start = Instant::now();
+            loop {
+                if w.status.exists() {
+                    return w;
+                }
+                if let Ok(Some(code)) = w.child.try_wait() {
+                    let out = w.output();
+                    assert!(
+                        out.contains("XOpenDisplayFailed") && attempt < 4,
+                        "the window exited ({code})\n{out}"
+                    );
+                    println!("attempt {attempt}: the window could not open the display; again in 1 s");
+                    break;
+                }
+                assert!(start.elapsed() < START_TIMEOUT, "no status after {START_TIMEOUT:?}\n{}", w.output());
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            std::thread::sleep(Duration::from_secs(1));
+        }
+        unreachable!("the last attempt either starts or fails an assertion")
     }
 
     /// The window's own output, for failure messages.
