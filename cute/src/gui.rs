@@ -230,6 +230,19 @@ impl CuteUiState {
     }
 }
 
+/// Where the GUI's buttons were drawn last (logical pixels, origin top-left), by label: what a
+/// status file reports so that a test can click them with real input events.
+#[derive(Resource, Debug, Default, Clone, PartialEq)]
+pub struct ButtonRects(pub std::collections::BTreeMap<String, Rect>);
+
+impl ButtonRects {
+    /// Records where the button `label` was drawn.
+    pub fn record(&mut self, label: &str, response: &egui::Response) {
+        let r = response.rect;
+        self.0.insert(label.to_string(), Rect::new(r.min.x, r.min.y, r.max.x, r.max.y));
+    }
+}
+
 /// A screenshot of the primary window, taken once `ready` is set and `settle_frames` more frames
 /// have been drawn; the app exits when the file is written.
 #[derive(Resource, Debug, Clone)]
@@ -350,6 +363,7 @@ impl<R: CuteAccess> Plugin for CutePlugin<R> {
         }
         app.insert_resource(self.view)
             .init_resource::<CuteUiState>()
+            .init_resource::<ButtonRects>()
             .add_systems(Startup, spawn_map_sprite)
             .add_systems(
                 Update,
@@ -561,6 +575,7 @@ fn cute_toolbar<R: CuteAccess>(
     mut contexts: EguiContexts,
     mut session: ResMut<R>,
     mut ui_state: ResMut<CuteUiState>,
+    mut rects: ResMut<ButtonRects>,
     view: Res<CuteView>,
     window: Query<&Window, With<PrimaryWindow>>,
 ) -> bevy::ecs::error::Result {
@@ -580,14 +595,19 @@ fn cute_toolbar<R: CuteAccess>(
                 let carto = ui
                     .add_enabled(!busy && !compat, egui::Button::new("Cartography"))
                     .on_hover_text("map the room (serpentine sweep)");
+                rects.record("Cartography", &carto);
                 if carto.clicked() {
                     ui_state.notice = session.cute_mut().start_cartography().err().map(|e| e.to_string());
                 }
-                if ui.button("Stop").clicked() {
+                let stop = ui.button("Stop");
+                rects.record("Stop", &stop);
+                if stop.clicked() {
                     session.cute_mut().stop();
                     ui_state.notice = None;
                 }
-                if ui.button("Reset map").clicked() {
+                let reset = ui.button("Reset map");
+                rects.record("Reset map", &reset);
+                if reset.clicked() {
                     session.cute_mut().reset_map();
                     ui_state.notice = Some("map reset".to_string());
                 }
@@ -611,13 +631,17 @@ fn cute_toolbar<R: CuteAccess>(
             .anchor(egui::Align2::CENTER_CENTER, [offset.x, offset.y])
             .show(ctx, |ui| {
                 ui.label(popup.text.as_str());
-                if ui.button("OK").clicked() {
+                let ok = ui.button("OK");
+                rects.record("OK", &ok);
+                if ok.clicked() {
                     close = true;
                 }
             });
         if close {
             ui_state.popups.pop_front();
         }
+    } else {
+        rects.0.remove("OK");
     }
     Ok(())
 }

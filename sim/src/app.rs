@@ -44,12 +44,14 @@ pub enum Mode {
     /// No window: as fast as the CPU allows.
     Headless,
     /// One window, the world beside Cute's map, paced to wall time × a speed factor by the
-    /// window's `pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing).
+    /// window's `pace_lockstep` in `Update` (`Time<Fixed>` is not used for pacing). The run is
+    /// made [`Lockstep::interactive`]: the script plays, then the user drives until the window
+    /// is closed.
     #[cfg(feature = "window")]
     Window,
 }
 
-/// Window screenshots (tests, docs).
+/// What the window writes for tests and docs: a screenshot, a status file.
 #[derive(clap::Args, Clone, Debug)]
 pub struct ScreenshotArgs {
     /// Run at full speed to --screenshot-after sim seconds, save a PNG of the window, exit
@@ -59,12 +61,16 @@ pub struct ScreenshotArgs {
     /// Sim seconds before the screenshot.
     #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
     pub screenshot_after: f64,
+    /// Rewrite FILE a few times a second with what the window shows, as JSON: sim time, speed,
+    /// script state and verdict, robot, Cute's map, where the buttons are (implies --window).
+    #[arg(long, value_name = "FILE")]
+    pub status_file: Option<PathBuf>,
 }
 
 impl ScreenshotArgs {
     /// No screenshot.
     pub fn none() -> ScreenshotArgs {
-        ScreenshotArgs { screenshot: None, screenshot_after: 10.0 }
+        ScreenshotArgs { screenshot: None, screenshot_after: 10.0, status_file: None }
     }
 
     /// The screenshot's file and sim time, when one is asked for.
@@ -126,14 +132,18 @@ pub enum WindowError {
 }
 
 /// Opens the window on `run` until it is closed (or, with a screenshot asked for, until the
-/// picture is saved); whether the app ended well.
-pub fn run_window(run: Lockstep, shot: &ScreenshotArgs) -> Result<bool, WindowError> {
-    let shot = shot.request()?;
+/// picture is saved); whether the app ended well. The script, if any, plays first; then the
+/// user drives (see `sim::window`).
+pub fn run_window(run: Lockstep, args: &ScreenshotArgs) -> Result<bool, WindowError> {
+    let shot = args.request()?;
     #[cfg(feature = "window")]
     {
         let mut app = make_app(Mode::Window, run);
         if let Some((path, after_s)) = shot {
             crate::window::request_screenshot(&mut app, path, after_s);
+        }
+        if let Some(path) = &args.status_file {
+            crate::window::request_status_file(&mut app, path.clone());
         }
         Ok(app.run().is_success())
     }
@@ -159,6 +169,9 @@ pub fn make_app_with(mode: Mode, run: Lockstep, steps_per_tick: u32, ticks_per_u
     let steps_per_tick = steps_per_tick.max(1);
     let ticks_per_update = ticks_per_update.max(1);
     let tick = std::time::Duration::from_micros(run.dt().total_micros()) * steps_per_tick;
+    // In the window the user ends the run: the script plays first, then the user drives.
+    #[cfg(feature = "window")]
+    let run = if mode == Mode::Window { run.interactive() } else { run };
     let mut app = App::new();
     match mode {
         Mode::Headless => {

@@ -25,6 +25,8 @@ pub struct CastRay {
     pub from: (f32, f32),
     /// Where the ray ended (hit point or maximum range), world metres.
     pub to: (f32, f32),
+    /// Whether the ray hit a wall or an obstacle within range (`to` is then the hit point).
+    pub hit: bool,
     /// Whether this ray produced an echo the sensor could hear (hit within the incidence limit).
     pub echo: bool,
 }
@@ -107,6 +109,7 @@ impl RobotBody {
             self.last_rays.push(CastRay {
                 from: origin,
                 to: (origin.0 + dir.0 * reach, origin.1 + dir.1 * reach),
+                hit: hit.is_some(),
                 echo: hit.is_some_and(|h| h.incidence <= self.incidence_limit),
             });
             hits.push(hit.map(|h| SonarHit { distance_m: h.distance, incidence_rad: h.incidence }));

@@ -52,6 +52,16 @@ impl Operator {
         self.finished_at
     }
 
+    /// Steps completed and steps in the script.
+    pub fn progress(&self) -> (usize, usize) {
+        (self.next.min(self.steps.len()), self.steps.len())
+    }
+
+    /// The step being played (waited on), if the script is not over.
+    pub fn current(&self) -> Option<&Step> {
+        self.steps.get(self.next)
+    }
+
     /// Actions Cute refused, e.g. `"GoTo(3, 4) at 12.000s: no path"`.
     pub fn errors(&self) -> &[String] {
         &self.errors

@@ -64,7 +64,7 @@ impl RunArgs {
 
     /// Whether the run is asked for in the window (`--window`, or a screenshot).
     pub fn wants_window(&self) -> bool {
-        self.window || self.shot.screenshot.is_some()
+        self.window || self.shot.screenshot.is_some() || self.shot.status_file.is_some()
     }
 }
 

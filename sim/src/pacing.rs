@@ -27,6 +27,9 @@ use robot_model::time::Instant;
 /// above 1).
 pub const MAX_OWED_S: f64 = 0.25;
 
+/// Wall time over which [`Pacing::achieved`] is measured, seconds.
+pub const ACHIEVED_WINDOW_S: f64 = 0.5;
+
 /// Sim time owed to the wall clock, seconds.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Owed {
@@ -106,11 +109,14 @@ pub struct Pacing {
     pub single_steps: u32,
     /// The runner never goes past this time (screenshots).
     pub stop_at: Option<Instant>,
-    /// Sim seconds per wall second over the last frames.
-    pub achieved: f64,
+    /// Sim seconds per wall second over the last [`ACHIEVED_WINDOW_S`] of running; `None` while
+    /// paused and until the first measurement after a start.
+    pub achieved: Option<f64>,
     /// Steps run in the last frame.
     pub last_steps: u64,
     owed: Owed,
+    /// Sim and wall seconds of the measurement under way.
+    measuring: (f64, f64),
 }
 
 impl Default for Pacing {
@@ -119,9 +125,10 @@ impl Default for Pacing {
             speed: Speed::RealTime,
             single_steps: 0,
             stop_at: None,
-            achieved: 0.0,
+            achieved: None,
             last_steps: 0,
             owed: Owed::default(),
+            measuring: (0.0, 0.0),
         }
     }
 }
@@ -155,10 +162,24 @@ impl Pacing {
             self.owed.ran(done, dt_s);
         }
         self.last_steps = done;
-        if wall_s > 0.0 {
-            let rate = done as f64 * dt_s / wall_s;
-            self.achieved = 0.9 * self.achieved + 0.1 * rate;
+        if self.speed == Speed::Paused {
+            self.forget_speed();
+            return;
         }
+        self.measuring.0 += done as f64 * dt_s;
+        self.measuring.1 += wall_s.max(0.0);
+        if self.measuring.1 >= ACHIEVED_WINDOW_S {
+            self.achieved = Some(self.measuring.0 / self.measuring.1);
+            self.measuring = (0.0, 0.0);
+        }
+    }
+
+    /// Forgets the achieved speed and what is owed (pause, restart): the next figure is a fresh
+    /// measurement.
+    pub fn forget_speed(&mut self) {
+        self.achieved = None;
+        self.measuring = (0.0, 0.0);
+        self.owed.clear();
     }
 }
 
@@ -194,6 +215,18 @@ mod tests {
         assert_eq!(p.steps_for(1.0, 0.005), 0);
         p.speed = Speed::Max;
         assert_eq!(p.steps_for(0.0, 0.005), u64::MAX);
+    }
+
+    #[test]
+    fn achieved_speed_is_measured_over_half_a_second_and_forgotten_when_paused() {
+        let mut p = Pacing { speed: Speed::Max, ..Pacing::default() };
+        p.ran(100, 0.005, 0.25);
+        assert_eq!(p.achieved, None, "not measured yet");
+        p.ran(300, 0.005, 0.25);
+        assert_eq!(p.achieved, Some(4.0), "2 s of sim in 0.5 s of wall");
+        p.speed = Speed::Paused;
+        p.ran(0, 0.005, 0.25);
+        assert_eq!(p.achieved, None);
     }
 
     #[test]

@@ -126,6 +126,10 @@ pub struct Lockstep {
     /// Where Carto believed the robot was, sampled whenever the twin adds a trail point.
     believed_trail: Vec<(f32, f32)>,
     settled_at: Option<Instant>,
+    /// The run goes on after the point where a headless run ends (see [`Lockstep::interactive`]).
+    open_ended: bool,
+    /// When the run reached the point where a headless run ends.
+    headless_end: Option<Instant>,
 }
 
 impl Lockstep {
@@ -205,6 +209,8 @@ impl Lockstep {
             localisation: Localisation::default(),
             believed_trail: Vec::new(),
             settled_at: None,
+            open_ended: false,
+            headless_end: None,
             loaded,
         })
     }
@@ -261,7 +267,13 @@ impl Lockstep {
                 self.believed_trail.push(point);
             }
         }
-        if move_ended || self.is_finished() {
+        // Headless, this is the run's last step; in an interactive run it happens once and the
+        // run goes on.
+        let at_end = self.headless_end.is_none() && self.headless_over();
+        if at_end {
+            self.headless_end = Some(now);
+        }
+        if move_ended || at_end {
             let (x, y, heading) = self.cute.cute().robot();
             self.localisation.sample(
                 now.as_secs_f64(),
@@ -270,8 +282,12 @@ impl Lockstep {
                 self.twin.body().pose(),
             );
         }
-        if self.steps.is_multiple_of(TRACE_EVERY) || self.is_finished() {
-            self.collect_traces();
+        if self.steps.is_multiple_of(TRACE_EVERY) || at_end {
+            if self.headless_end.is_some() && !at_end {
+                self.drop_traces();
+            } else {
+                self.collect_traces();
+            }
         }
         !self.is_finished()
     }
@@ -286,9 +302,58 @@ impl Lockstep {
         progress(self);
     }
 
-    /// Whether the run is over.
+    /// Whether the run is over: at the point where a headless run ends ([`Lockstep::headless_end`]),
+    /// and never for an [`interactive`](Lockstep::interactive) run.
     pub fn is_finished(&self) -> bool {
+        !self.open_ended && self.headless_over()
+    }
+
+    /// Whether the script is over (plus the settle time) or the time limit is reached.
+    fn headless_over(&self) -> bool {
         self.now >= self.end || self.settled_at.is_some_and(|t| self.now >= t)
+    }
+
+    /// This run, made to go on after its script and past the scenario's time limit until the caller
+    /// stops stepping it (the window: the user closes it). Up to the point where a headless run
+    /// ends, it takes exactly the same steps; after that Cute is the user's alone, and the link
+    /// logs are no longer kept (the link statistics still count).
+    pub fn interactive(mut self) -> Lockstep {
+        self.open_ended = true;
+        self
+    }
+
+    /// Whether the run goes on after its script ([`Lockstep::interactive`]).
+    pub fn is_interactive(&self) -> bool {
+        self.open_ended
+    }
+
+    /// When the run reached the point where a headless run ends: the script done and settled, or
+    /// the scenario's time limit (`max_sim_s`).
+    pub fn headless_end(&self) -> Option<Instant> {
+        self.headless_end
+    }
+
+    /// The same scenario again from its start pose, with the same seed (and interactive if this
+    /// run is).
+    pub fn restart(&self) -> Result<Lockstep, SetupError> {
+        let run = Lockstep::new(self.loaded.clone(), Some(self.seed))?;
+        Ok(if self.open_ended { run.interactive() } else { run })
+    }
+
+    /// The mission script's player.
+    pub fn operator(&self) -> &Operator {
+        &self.operator
+    }
+
+    /// Empties the tracers without keeping their records (an interactive run past its headless
+    /// end: the byte logs would grow without bound).
+    fn drop_traces(&mut self) {
+        for (_, _, handle) in &self.traces {
+            handle.take();
+        }
+        for handle in &self.cute.wrapper().traces {
+            handle.take();
+        }
     }
 
     fn collect_traces(&mut self) {
@@ -452,9 +517,10 @@ impl Lockstep {
             links,
             faults_injected,
             reconnects: self.cute.connects().saturating_sub(1),
-            // Hashing every byte of a long run costs; a report taken while the run goes on (the
-            // window's status) has none.
-            link_log_sha256: if self.is_finished() {
+            // Hashing every byte of a long run costs; a report taken while the run goes on has
+            // none. An interactive run past its headless end keeps the logs of the headless run
+            // (see `interactive`), so it has the headless run's hash.
+            link_log_sha256: if self.is_finished() || self.headless_end.is_some() {
                 self.final_hash.get_or_init(|| hash_logs(&self.logs)).clone()
             } else {
                 String::new()

@@ -205,3 +205,69 @@ fn scraping_a_wall_with_the_side_is_a_collision_but_not_a_bumper_press() {
     assert_eq!(body.world().collisions(), 1);
     assert!(!bumped, "a side contact pressed the front bumper");
 }
+
+/// Where segment a→b crosses segment c→d, as the fraction along a→b, if it does.
+fn crossing(a: (f32, f32), b: (f32, f32), c: (f32, f32), d: (f32, f32)) -> Option<f32> {
+    let r = (b.0 - a.0, b.1 - a.1);
+    let s = (d.0 - c.0, d.1 - c.1);
+    let den = r.0 * s.1 - r.1 * s.0;
+    if den.abs() < 1e-9 {
+        return None;
+    }
+    let q = (c.0 - a.0, c.1 - a.1);
+    let t = (q.0 * s.1 - q.1 * s.0) / den;
+    let u = (q.0 * r.1 - q.1 * r.0) / den;
+    ((0.0..=1.0).contains(&t) && (0.0..=1.0).contains(&u)).then_some(t)
+}
+
+/// Issue 16: every sonar ray ends where it hits — heard or lost, its end lies on a wall, and no
+/// ray goes through one — all over an L-shaped room (not convex), in every direction.
+#[test]
+fn issue_16_sonar_rays_end_at_the_wall_they_hit() {
+    let room_pts = [(0.0, 0.0), (3.1, 0.0), (3.1, 0.7), (0.7, 0.7), (0.7, 2.5), (0.0, 2.5)];
+    let text = format!("Scenario(name: \"l\", room: {room_pts:?}, start: (row: 0, col: 0, heading: East))");
+    let s = Scenario::from_ron_str(&text, "l.ron").unwrap();
+    let p = quiet_profile();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let edges: Vec<_> =
+        (0..room_pts.len()).map(|i| (room_pts[i], room_pts[(i + 1) % room_pts.len()])).collect();
+    let (mut rays, mut hits, mut lost) = (0, 0, 0);
+    // Robot centres 0.2 m from the walls, in both arms of the L, facing every 15°.
+    let centres =
+        (0..14).map(|i| (0.2 + 0.2 * i as f32, 0.35)).chain((0..11).map(|j| (0.35, 0.2 + 0.2 * j as f32)));
+    for (x, y) in centres {
+        for k in 0..24 {
+            let theta = (k as f32 * 15.0).to_radians();
+            let mut body = RobotBody::new(&s, &p, Pose2::new(x, y, theta), DT);
+            body.force_sonar(Instant::ZERO, &mut rng);
+            for r in body.last_rays() {
+                rays += 1;
+                for &(c, d) in &edges {
+                    if let Some(t) = crossing(r.from, r.to, c, d) {
+                        let len = ((r.to.0 - r.from.0).powi(2) + (r.to.1 - r.from.1).powi(2)).sqrt();
+                        assert!(
+                            (1.0 - t) * len < 1e-3,
+                            "ray {r:?} from ({x}, {y}) at {k}x15° crosses the wall {c:?}-{d:?} {:.3} m before its end",
+                            (1.0 - t) * len
+                        );
+                    }
+                }
+                if r.hit {
+                    hits += 1;
+                    lost += usize::from(!r.echo);
+                    let on_wall = edges.iter().any(|&(c, d)| {
+                        let (dx, dy) = (d.0 - c.0, d.1 - c.1);
+                        let t = (((r.to.0 - c.0) * dx + (r.to.1 - c.1) * dy) / (dx * dx + dy * dy))
+                            .clamp(0.0, 1.0);
+                        let (px, py) = (c.0 + t * dx, c.1 + t * dy);
+                        ((r.to.0 - px).powi(2) + (r.to.1 - py).powi(2)).sqrt() < 1e-3
+                    });
+                    assert!(on_wall, "ray {r:?} ends off every wall");
+                } else {
+                    assert!(!r.echo, "{r:?}");
+                }
+            }
+        }
+    }
+    assert!(hits > rays / 2 && lost > 0, "{rays} rays, {hits} hits, {lost} lost to incidence");
+}

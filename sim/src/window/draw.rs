@@ -161,6 +161,18 @@ pub(super) fn place_world(
     }
 }
 
+/// Walls are drawn this many pixels thick.
+const WALL_PX: u32 = 4;
+
+/// A line `px` pixels thick: parallel one-pixel gizmo lines, centred on a→b.
+fn thick_line(gizmos: &mut Gizmos, a: Vec2, b: Vec2, px: u32, color: Color) {
+    let normal = (b - a).normalize_or_zero().perp();
+    for k in 0..px {
+        let offset = normal * (k as f32 - (px as f32 - 1.0) * 0.5);
+        gizmos.line_2d(a + offset, b + offset, color);
+    }
+}
+
 pub(super) fn draw_world(sim: Res<Sim>, window: Single<&Window, With<PrimaryWindow>>, mut gizmos: Gizmos) {
     let run = &sim.0;
     let size = window.size();
@@ -180,11 +192,15 @@ pub(super) fn draw_world(sim: Res<Sim>, window: Single<&Window, With<PrimaryWind
         gizmos.line_2d(w(x, f.top), w(x, f.top - f.rows as f32 * f.cell), grid);
     }
 
-    // Walls and obstacle outlines.
-    let wall = Color::srgb(0.1, 0.1, 0.12);
+    // Walls, thick and in a colour that shows on the floor and on the dark background alike (a
+    // wall on the panel's edge must not look like the edge), and obstacle outlines.
+    let wall = Color::srgb(0.42, 0.45, 0.55);
     let room = &scenario.room;
-    if room.len() >= 2 {
-        gizmos.linestrip_2d(room.iter().chain(room.first()).map(|&(x, y)| w(x, y)), wall);
+    for (i, &(x0, y0)) in room.iter().enumerate() {
+        let Some(&(x1, y1)) = room.get(i + 1).or(room.first()).filter(|_| room.len() >= 2) else {
+            continue;
+        };
+        thick_line(&mut gizmos, w(x0, y0), w(x1, y1), WALL_PX, wall);
     }
     let edge = Color::srgb(0.3, 0.2, 0.12);
     for o in &scenario.obstacles {
@@ -201,7 +217,7 @@ pub(super) fn draw_world(sim: Res<Sim>, window: Single<&Window, With<PrimaryWind
                 gizmos.circle_2d(w(center.0, center.1), radius * layout.scale, edge);
             }
             Obstacle::Segment { from, to } => {
-                gizmos.line_2d(w(from.0, from.1), w(to.0, to.1), wall);
+                thick_line(&mut gizmos, w(from.0, from.1), w(to.0, to.1), WALL_PX, wall);
             }
             Obstacle::Polygon { points } => {
                 gizmos.linestrip_2d(points.iter().chain(points.first()).map(|&(x, y)| w(x, y)), edge);
@@ -218,15 +234,29 @@ pub(super) fn draw_world(sim: Res<Sim>, window: Single<&Window, With<PrimaryWind
         Color::srgb(0.75, 0.3, 0.75),
     );
 
-    // Sonar: the rays of the last measurement and the cone through their ends.
-    let rays = run.body().last_rays();
-    for r in rays {
-        let color = if r.echo { Color::srgb(0.0, 0.75, 0.55) } else { Color::srgba(0.9, 0.3, 0.3, 0.6) };
-        gizmos.line_2d(w(r.from.0, r.from.1), w(r.to.0, r.to.1), color);
-    }
-    if rays.len() >= 2 {
-        let cone = Color::srgba(0.0, 0.6, 0.45, 0.5);
-        gizmos.linestrip_2d(rays.iter().map(|r| w(r.to.0, r.to.1)), cone);
+    // Sonar: the rays of the last measurement, each ending where it hit. A heard ray is drawn
+    // to its echo point with a dot there; a ray lost to incidence faintly, with a cross at the
+    // surface it glanced off; a ray that hit nothing within range, dotted to its range.
+    for r in run.body().last_rays() {
+        let (from, to) = (w(r.from.0, r.from.1), w(r.to.0, r.to.1));
+        if r.echo {
+            let heard = Color::srgb(0.0, 0.75, 0.55);
+            gizmos.line_2d(from, to, heard);
+            gizmos.circle_2d(to, 3.0, heard);
+        } else if r.hit {
+            let lost = Color::srgba(0.9, 0.3, 0.3, 0.7);
+            gizmos.line_2d(from, to, Color::srgba(0.9, 0.3, 0.3, 0.35));
+            gizmos.line_2d(to + Vec2::new(-4.0, -4.0), to + Vec2::new(4.0, 4.0), lost);
+            gizmos.line_2d(to + Vec2::new(-4.0, 4.0), to + Vec2::new(4.0, -4.0), lost);
+        } else {
+            let miss = Color::srgba(0.6, 0.6, 0.6, 0.5);
+            let n = 12;
+            for i in (0..n).step_by(2) {
+                let a = from.lerp(to, i as f32 / n as f32);
+                let b = from.lerp(to, (i + 1) as f32 / n as f32);
+                gizmos.line_2d(a, b, miss);
+            }
+        }
     }
 
     // Heading arrow and bumper.

@@ -14,9 +14,16 @@
 //! lockstep as headless: pacing only decides how many steps run per frame, so a window run
 //! reaches the same states at the same sim times.
 //!
+//! The run never ends by itself here: the runner is [`Lockstep::interactive`], so the scenario's
+//! script plays first and then the user drives until the window is closed; the expectations are
+//! checked at the step where `explobot run` would stop, and Restart starts the scenario again
+//! ([`session`]). The scenario's `max_sim_s` only decides when that verdict is taken if the script
+//! has not ended by then.
+//!
 //! Layout of this folder: `layout` (window size, [`WorldLayout`]), `draw` (floor texture,
-//! sprites, gizmos), `panels` (time controls, status bar); this file holds the plugin, the
-//! pacing system and screenshots.
+//! sprites, gizmos), `panels` (time controls, status bar), `session` (script → user handover,
+//! verdict, restart), `status_file` (`--status-file`); this file holds the plugin, the pacing
+//! system and screenshots.
 //!
 //! Invariants: one `Camera2d` at the origin, one world unit = one logical pixel (see
 //! [`cute::gui`]); [`WorldLayout`] is the only place that maps metres to pixels; a screenshot
@@ -37,6 +44,7 @@ use std::time::Duration as WallDuration;
 
 use bevy::app::{App, Plugin, Startup, Update};
 use bevy::ecs::schedule::IntoScheduleConfigs;
+use bevy::ecs::schedule::common_conditions::resource_exists;
 use bevy::ecs::system::{Res, ResMut};
 use bevy::math::Rect;
 use bevy::prelude::ClearColor;
@@ -44,8 +52,8 @@ use bevy::time::{Real, Time};
 use cute::Cute;
 use cute::gui::bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
 use cute::gui::{
-    AutoScreenshot, BACKGROUND, CuteAccess, CutePlugin, CuteView, continuous_updates, setup_camera,
-    window_plugins,
+    AutoScreenshot, BACKGROUND, ButtonRects, CuteAccess, CutePlugin, CuteUiState, CuteView,
+    continuous_updates, setup_camera, window_plugins,
 };
 use robot_model::time::Instant;
 
@@ -56,9 +64,13 @@ use crate::runner::Lockstep;
 mod draw;
 mod layout;
 mod panels;
+pub mod session;
+mod status_file;
 
 pub use draw::{FLOOR_RGB, OBSTACLE_RGB, OUTSIDE_RGB, PALETTE, ROBOT_RGB};
 pub use layout::{STATUS_HEIGHT, WINDOW_SIZE, WorldLayout};
+pub use session::{Handover, ScriptState};
+pub use status_file::{STATUS_EVERY_S, StatusFile};
 
 /// Longest time the runner may take per frame.
 pub const FRAME_BUDGET: WallDuration = WallDuration::from_millis(12);
@@ -88,8 +100,8 @@ pub fn add_window_plugins(app: &mut App, run: &Lockstep) {
         }));
 }
 
-/// Runs the twin at full speed to `after_s` sim seconds (or the end of the run), stops there,
-/// saves a PNG of the window to `path` and exits.
+/// Runs the twin at full speed to `after_s` sim seconds (or the point where a headless run
+/// ends, if sooner), stops there, saves a PNG of the window to `path` and exits.
 pub fn request_screenshot(app: &mut App, path: PathBuf, after_s: f64) {
     let at = Instant::from_secs_f64(after_s.max(0.0));
     app.insert_resource(AutoScreenshot::new(path));
@@ -98,11 +110,17 @@ pub fn request_screenshot(app: &mut App, path: PathBuf, after_s: f64) {
 }
 
 fn screenshot_when_due(sim: Res<Sim>, mut pacing: ResMut<Pacing>, mut shot: ResMut<AutoScreenshot>) {
-    let due = pacing.stop_at.is_some_and(|at| sim.0.now() >= at) || sim.0.is_finished();
+    let due = pacing.stop_at.is_some_and(|at| sim.0.now() >= at) || sim.0.headless_end().is_some();
     if due && !shot.ready {
         shot.ready = true;
         pacing.speed = Speed::Paused;
     }
+}
+
+/// Makes the window rewrite a JSON status file at `path` a few times a second (see
+/// [`status_file`]).
+pub fn request_status_file(app: &mut App, path: PathBuf) {
+    app.insert_resource(StatusFile::new(path));
 }
 
 /// Draws the true world and the time controls; see the module docs. Registers resources and
@@ -118,15 +136,29 @@ impl Plugin for SimRenderPlugin {
             app.init_resource::<Pacing>();
         }
         app.init_resource::<panels::StatusCache>()
+            .init_resource::<Handover>()
+            .init_resource::<ButtonRects>()
+            .init_resource::<CuteUiState>()
             .add_systems(Startup, draw::spawn_world)
+            .add_systems(Update, session::restart_when_asked.before(SimSystems::Step))
             .add_systems(Update, pace_lockstep.in_set(SimSystems::Step))
+            .add_systems(
+                Update,
+                status_file::write_status.after(SimSystems::Step).run_if(resource_exists::<StatusFile>),
+            )
             .add_systems(Update, (draw::place_world, draw::draw_world).chain().after(SimSystems::Step))
             .add_systems(EguiPrimaryContextPass, (panels::time_controls, panels::status_bar));
     }
 }
 
-/// Steps the runner for this frame; see the module docs.
-pub fn pace_lockstep(mut sim: ResMut<Sim>, mut pacing: ResMut<Pacing>, time: Res<Time<Real>>) {
+/// Steps the runner for this frame, and takes the verdict at the step where a headless run would
+/// end; see the module docs.
+pub fn pace_lockstep(
+    mut sim: ResMut<Sim>,
+    mut pacing: ResMut<Pacing>,
+    mut handover: ResMut<Handover>,
+    time: Res<Time<Real>>,
+) {
     let started = std::time::Instant::now();
     let wall_s = time.delta_secs_f64();
     let dt_s = sim.0.dt().as_secs_f64();
@@ -137,6 +169,10 @@ pub fn pace_lockstep(mut sim: ResMut<Sim>, mut pacing: ResMut<Pacing>, time: Res
             break;
         }
         done += 1;
+        if handover.take_verdict(&sim.0, time.elapsed_secs_f64()) {
+            // The report took a while: let this frame be drawn.
+            break;
+        }
         if done.is_multiple_of(8) && started.elapsed() >= FRAME_BUDGET {
             break;
         }

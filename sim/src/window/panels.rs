@@ -1,18 +1,22 @@
-//! The twin's egui panels: time controls over the world view (speed buttons, Step, the
-//! scenario's figures) and the status bar along the bottom (sim time, achieved speed, Cute's
-//! status, coverage, and bytes and frames per link).
+//! The twin's egui panels: time controls over the world view (speed buttons, Step, Restart, the
+//! scenario's figures, where the script stands and its verdict) and the status bar along the
+//! bottom (sim time, the speed achieved, the script or the user driving, Cute's status, coverage,
+//! and bytes and frames per link).
 //!
-//! Invariant: the status bar's report is rebuilt at most every [`REPORT_EVERY_S`] of wall time
-//! (and at once when paused, so a screenshot shows the figures of its instant).
+//! Invariants: the status bar's report is rebuilt at most every [`REPORT_EVERY_S`] of wall time
+//! (and at once when paused, so a screenshot shows the figures of its instant); the speed shown
+//! is measured ([`Pacing::achieved`]) or says that it is being measured, never a stale zero.
 
 use bevy::ecs::system::{Query, Res, ResMut};
 use bevy::prelude::{Resource, With};
 use bevy::time::{Real, Time};
 use bevy::window::{PrimaryWindow, Window};
+use cute::gui::ButtonRects;
 use cute::gui::bevy_egui::{EguiContexts, egui};
 use robot_model::time::Instant;
 
 use super::layout::STATUS_HEIGHT;
+use super::session::{Handover, ScriptState};
 use crate::pacing::{Pacing, Speed};
 use crate::plugin::Sim;
 use crate::report::Report;
@@ -22,7 +26,7 @@ const REPORT_EVERY_S: f64 = 0.5;
 
 /// The last report (rebuilt every [`REPORT_EVERY_S`]) and when it was made.
 #[derive(Resource, Default)]
-pub(super) struct StatusCache {
+pub(crate) struct StatusCache {
     report: Option<Report>,
     made_at_s: f64,
     sim_at: Option<Instant>,
@@ -31,6 +35,8 @@ pub(super) struct StatusCache {
 pub(super) fn time_controls(
     mut contexts: EguiContexts,
     mut pacing: ResMut<Pacing>,
+    mut handover: ResMut<Handover>,
+    mut rects: ResMut<ButtonRects>,
     sim: Res<Sim>,
 ) -> bevy::ecs::error::Result {
     let ctx = contexts.ctx_mut()?;
@@ -38,35 +44,81 @@ pub(super) fn time_controls(
         ui.horizontal(|ui| {
             ui.strong("Twin");
             for speed in [Speed::Paused, Speed::RealTime, Speed::Times10, Speed::Max] {
-                if ui.selectable_label(pacing.speed == speed, speed.label()).clicked() {
+                let button = ui.selectable_label(pacing.speed == speed, speed.label());
+                rects.record(speed.label(), &button);
+                if button.clicked() && pacing.speed != speed {
                     pacing.speed = speed;
                     pacing.stop_at = None;
+                    pacing.forget_speed();
                 }
             }
             let step = ui.button("Step").on_hover_text("pause and run one physics step");
+            rects.record("Step", &step);
             if step.clicked() {
                 pacing.speed = Speed::Paused;
                 pacing.stop_at = None;
                 pacing.single_steps += 1;
             }
+            let restart =
+                ui.button("Restart").on_hover_text("the scenario again from its start pose, same seed");
+            rects.record("Restart", &restart);
+            if restart.clicked() {
+                handover.restart = true;
+            }
         });
         let run = &sim.0;
         let s = &run.loaded().scenario;
         ui.label(format!(
-            "scenario '{}' (seed {}), {}x{} cells of {:.2} m, step {} ms",
+            "scenario '{}' (seed {}), {}x{} cells of {:.2} m, step {} ms, headless limit {:.0} s",
             s.name,
             run.seed(),
             run.frame().rows,
             run.frame().cols,
             run.frame().cell,
-            run.dt().as_secs_f64() * 1000.0
+            run.dt().as_secs_f64() * 1000.0,
+            run.time_limit().as_secs_f64(),
         ));
-        ui.label(
-            egui::RichText::new("true world: walls, obstacles, robot + wheels, sonar rays, trail")
-                .color(egui::Color32::from_rgb(170, 180, 200)),
+        let mut colour = egui::Color32::from_rgb(170, 180, 200);
+        let mut line = match (handover.verdict_line(), ScriptState::of(run)) {
+            (Some(verdict), state) => {
+                let passed = handover.verdict.as_ref().is_some_and(|r| r.passed);
+                colour = if passed {
+                    egui::Color32::from_rgb(120, 220, 140)
+                } else {
+                    egui::Color32::from_rgb(250, 130, 110)
+                };
+                match state {
+                    ScriptState::Done(at) => format!("script done at {:.1} s: {verdict}", at.as_secs_f64()),
+                    ScriptState::NoScript => format!("no script: you drive from the start ({verdict})"),
+                    ScriptState::LimitPassed { limit, .. } => {
+                        format!("at the headless limit {:.0} s: {verdict}", limit.as_secs_f64())
+                    }
+                    _ => verdict,
+                }
+            }
+            (None, ScriptState::NoScript) => "no script: you drive from the start".to_string(),
+            (None, _) => "the script plays first, then you drive".to_string(),
+        };
+        if let Some(e) = &handover.error {
+            line = format!("{line} | {e}");
+        }
+        ui.label(egui::RichText::new(line).color(colour)).on_hover_text(
+            "the scenario's script plays first; when it is done (or at once when there is none) the \
+             expectations are checked and you drive: Cartography, Stop, Reset map, click a free cell",
         );
     });
     Ok(())
+}
+
+/// The speed as the status bar words it: `paused`, `Max: 85x real time`, `1x: measuring`.
+pub(super) fn speed_text(speed: Speed, achieved: Option<f64>) -> String {
+    match (speed, achieved) {
+        (Speed::Paused, _) => "paused".to_string(),
+        (s, None) => format!("{}: measuring", s.label()),
+        (s, Some(x)) if x >= 9.95 => format!("{}: {x:.0}x real time", s.label()),
+        (s, Some(x)) if x >= 0.095 => format!("{}: {x:.1}x real time", s.label()),
+        (s, Some(_)) => format!("{}: below 0.1x real time", s.label()),
+    }
 }
 
 fn kilo(bytes: u64) -> String {
@@ -95,15 +147,12 @@ pub(super) fn status_bar(
     }
     let ctx = contexts.ctx_mut()?;
     let height = window.size().y;
-    let speed = match pacing.speed {
-        Speed::Paused => "paused".to_string(),
-        s => format!("{} (achieved {:.1}x)", s.label(), pacing.achieved),
-    };
-    let finished = if run.is_finished() { " (run finished)" } else { "" };
+    let speed = speed_text(pacing.speed, pacing.achieved);
+    let script = ScriptState::of(run);
     let mut line1 = format!(
-        "t = {:.2} s / {:.0} s{finished} | {speed} | Cute: {:?}",
+        "t = {:.2} s | {speed} | {} | Cute: {:?}",
         run.now().as_secs_f64(),
-        run.time_limit().as_secs_f64(),
+        script.text(),
         run.cute().status(),
     );
     let mut line2 = String::new();
@@ -140,4 +189,18 @@ pub(super) fn status_bar(
             ui.label(egui::RichText::new(line2).monospace());
         });
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn issue_16_speed_is_measured_or_paused_never_zero() {
+        assert_eq!(speed_text(Speed::Paused, Some(3.0)), "paused");
+        assert_eq!(speed_text(Speed::Max, None), "Max: measuring");
+        assert_eq!(speed_text(Speed::Max, Some(85.3)), "Max: 85x real time");
+        assert_eq!(speed_text(Speed::RealTime, Some(0.98)), "1x: 1.0x real time");
+        assert_eq!(speed_text(Speed::Times10, Some(0.0)), "10x: below 0.1x real time");
+    }
 }
