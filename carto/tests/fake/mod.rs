@@ -379,3 +379,19 @@ impl Harness {
         ((self.robot.x - x0).powi(2) + (self.robot.y - y0).powi(2)).sqrt()
     }
 }
+
+/// The pose the scripted tests acknowledge first: (5, 5) facing EAST.
+pub const POSE: GuiMessage =
+    GuiMessage::SendRobotPosition { x: 5, y: 5, direction: protocol::link::Direction::East };
+
+impl Harness {
+    /// A harness with sensors flowing and [`POSE`] acknowledged.
+    pub fn ready() -> Harness {
+        let mut h = Harness::new();
+        h.warm_up();
+        h.send(POSE);
+        assert_eq!(h.reply_msgs(), vec![GuiMessage::RobotPositionReceived]);
+        h.replies.clear();
+        h
+    }
+}
