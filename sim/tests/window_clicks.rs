@@ -16,7 +16,7 @@
 #![cfg(feature = "window")]
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
@@ -327,7 +327,8 @@ fn issue_16_window_user_drives_a_room_without_script() {
     }
     let _one = ONE_WINDOW.lock().unwrap_or_else(|e| e.into_inner());
     // scenarios/empty.ron without its mission and expectations: what someone writes to drive.
-    let scenarios = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+    // Relative to the package root, cargo test's working directory (not a compile-time path).
+    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
     let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
     let robot = scenarios.join("robots/mecanum-4wd.ron").canonicalize().unwrap();
     let text: String = text

@@ -10,7 +10,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod daemon_util;
+mod processes;
 
 use std::io::Read;
 use std::net::{TcpListener, TcpStream};
@@ -18,7 +18,7 @@ use std::process::Command;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use daemon_util::*;
+use processes::*;
 use protocol::link::{Command as Cmd, Direction, GuiMessage};
 use protocol::motor::{ChecksumPolicy, Decoder as MotorDecoder, MotorCommand, MotorPacket};
 

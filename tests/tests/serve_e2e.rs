@@ -6,59 +6,17 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
+mod processes;
+
 use std::io::{BufRead, BufReader};
-use std::net::TcpListener;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::Path;
+use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use processes::{Guard, TempDir, binary, free_port, workspace_root};
 use protocol::link::{Command as Cmd, Decoder, Direction, GuiMessage, MsgOrder};
 use transport::{Link, TcpLink};
-
-/// Kills the child process when dropped, so a failing test leaves nothing running.
-struct Guard(Child);
-
-impl Drop for Guard {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// A scratch folder removed when the test ends, passed or failed.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        TempDir(dir)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
-/// The workspace's binaries sit next to this test's `deps/` folder.
-fn binary(name: &str) -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    let dir = exe.parent().and_then(Path::parent).expect("target profile folder");
-    let path = dir.join(name);
-    assert!(
-        path.exists(),
-        "{} is missing: build the workspace binaries first (cargo test --workspace builds them)",
-        path.display()
-    );
-    path
-}
-
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
 
 fn read_until(
     link: &mut TcpLink,
@@ -126,10 +84,6 @@ fn start_twin_and_carto(root: &Path, run_dir: &Path) -> (Guard, Guard, mpsc::Rec
         .spawn()
         .expect("start carto");
     (twin, Guard(carto), lines, port)
-}
-
-fn workspace_root() -> PathBuf {
-    std::env::current_dir().unwrap().parent().unwrap().to_path_buf()
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! Processes and clients for `daemon.rs`: the served twin, the `carto` binary, a link-protocol
-//! client, all cleaned up on drop.
+//! Processes and clients for the multi-process tests (`daemon.rs`, `serve_e2e.rs`): the served
+//! twin, the `carto` binary, a link-protocol client, scratch folders, all cleaned up on drop.
 
 #![allow(dead_code)]
 
@@ -54,11 +54,13 @@ pub fn binary(name: &str) -> PathBuf {
     path
 }
 
+/// The repository root: the parent of the package root, which is `cargo test`'s working directory
+/// (a path baked in at compile time would go stale when two checkouts share a target directory).
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+    std::env::current_dir().unwrap().parent().unwrap().to_path_buf()
 }
 
-fn free_port() -> u16 {
+pub fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
