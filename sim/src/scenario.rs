@@ -330,6 +330,17 @@ impl Scenario {
         self.cell.unwrap_or(profile.grid_cell_m)
     }
 
+    /// What the robot of `profile` can really do in this room (see [`RobotTruth`]), on the grid
+    /// [`room_frame`] lays over it. [`LoadedScenario`] builds it once, after checking the grid.
+    pub fn truth(&self, profile: &RobotProfile) -> RobotTruth {
+        RobotTruth::build(
+            room_frame(&self.room, self.cell_size(profile)),
+            &self.room,
+            &self.obstacle_shapes(),
+            profile,
+        )
+    }
+
     /// The fixed physics step.
     pub fn dt(&self) -> Duration {
         Duration::from_secs_f64(f64::from(self.physics.step_ms) / 1000.0)

@@ -111,12 +111,7 @@ pub(super) fn can_drive(shapes: &[Shaped], profile: &RobotProfile, from: Pt, to:
 /// A start cell where the robot can turn on the spot and drive to a free neighbour, drawn from
 /// the largest connected free area first.
 pub(super) fn choose_start(s: &Scenario, profile: &RobotProfile, rng: &mut ChaCha8Rng) -> Option<Start> {
-    let grid = RobotTruth::build(
-        grid::room_frame(&s.room, s.cell_size(profile)),
-        &s.room,
-        &s.obstacle_shapes(),
-        profile,
-    );
+    let grid = s.truth(profile);
     let shapes = scenario_shapes(s);
     let (rows, cols) = (grid.rows, grid.cols);
     let mut label = vec![usize::MAX; rows * cols];

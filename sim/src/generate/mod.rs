@@ -79,7 +79,6 @@ use crate::grid;
 use crate::scenario::{
     Expectations, Heading, LoadedScenario, Obstacle, PhysicsSettings, Scenario, Start, Step, polygon_area,
 };
-use crate::truth::RobotTruth;
 
 mod draft;
 mod finish;

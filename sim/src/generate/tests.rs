@@ -121,12 +121,7 @@ fn the_robot_can_turn_in_its_start_cell_and_move_to_a_neighbour() {
     assert!((radius - 0.177).abs() < 0.001);
     for s in corpus() {
         let sc = s.room.scenario();
-        let grid = RobotTruth::build(
-            grid::room_frame(&sc.room, sc.cell_size(&profile)),
-            &sc.room,
-            &sc.obstacle_shapes(),
-            &profile,
-        );
+        let grid = sc.truth(&profile);
         let (r, c) = (usize::from(sc.start.row), usize::from(sc.start.col));
         let centre = grid.frame.cell_center(r, c);
         let clearance = sc.obstacles.iter().map(|o| distance_to(o, centre)).fold(f32::MAX, f32::min);
@@ -283,12 +278,7 @@ fn some_rooms_have_closed_pockets() {
     let profile = RobotProfile::default();
     let pocket = |s: &Sample| {
         let sc = s.room.scenario();
-        let grid = RobotTruth::build(
-            grid::room_frame(&sc.room, sc.cell_size(&profile)),
-            &sc.room,
-            &sc.obstacle_shapes(),
-            &profile,
-        );
+        let grid = sc.truth(&profile);
         let reach = grid.reachable_from((usize::from(sc.start.row), usize::from(sc.start.col)));
         (0..grid.rows).any(|r| (0..grid.cols).any(|c| grid.is_free(r, c) && !reach[r * grid.cols + c]))
     };
