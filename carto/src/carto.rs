@@ -412,6 +412,13 @@ impl Carto {
         self.peer.is_some()
     }
 
+    /// Where Carto believes the robot is: the stored pose and the dead-reckoned offset from that
+    /// cell's centre (the `pose` and `cell_offset` of [`Carto::status`], without building the
+    /// whole snapshot). `None` until a pose is stored.
+    pub fn believed_pose(&self) -> Option<(GridPose, crate::odometry::CellOffset)> {
+        self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
+    }
+
     /// A snapshot of the state.
     pub fn status(&self) -> CartoStatus {
         CartoStatus {

@@ -260,9 +260,11 @@ impl Lockstep {
         let trail_points = self.twin.trail().len();
         self.twin.physics_step(now);
         if self.twin.trail().len() != trail_points {
-            let carto = self.carto.carto().status();
-            if let Some(point) =
-                carto.pose.and_then(|pose| carto_belief(&self.truth.frame, pose, carto.cell_offset))
+            if let Some(point) = self
+                .carto
+                .carto()
+                .believed_pose()
+                .and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset))
             {
                 self.believed_trail.push(point);
             }
