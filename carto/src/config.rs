@@ -2,7 +2,8 @@
 //!
 //! Every number the controller uses lives here, so a user with another chassis changes the robot
 //! profile (or this struct), never code. [`CartoConfig::default`] matches the default robot of
-//! `robot.md` (mecanum 4WD, 0.30 m cells); [`CartoConfig::from_profile`] derives the geometry from a
+//! `robot.md` (mecanum 4WD) with 0.45 m cells (the design's 0.30 m cannot hold the turning body:
+//! see `RobotProfile::grid_cell_m`); [`CartoConfig::from_profile`] derives the geometry from a
 //! [`robot_model::profile::RobotProfile`] and keeps the controller defaults.
 //!
 //! Invariants: lengths in metres, angles in degrees, speeds as drive v2 percentages (±100, where
@@ -11,7 +12,7 @@
 //! ```
 //! use carto::CartoConfig;
 //! let cfg = CartoConfig::default();
-//! assert!((cfg.cell_size_m - 0.30).abs() < 1e-9);
+//! assert!((cfg.cell_size_m - 0.45).abs() < 1e-9);
 //! // 11 pulses × 18.8 per wheel revolution, wheel radius 0.039 m → about 844 counts per metre
 //! assert!((cfg.encoder_counts_per_metre() - 843.9).abs() < 0.5);
 //! ```
@@ -45,6 +46,26 @@ pub struct CartoConfig {
     /// A distance reading older than this never counts for the obstacle check (the HC-SR04
     /// reports at 10 Hz: three periods).
     pub distance_max_age: Duration,
+
+    /// Before a FORWARD whose straight reading is clear, the sonar also looks this far left and
+    /// right of the grid heading (two small turns on the spot and back), degrees; `0` turns the
+    /// scan off (one straight reading, as in the design document). See [`crate::surroundings`].
+    pub scan_deg: f64,
+    /// Body length (front to back), metres: the footprint the corridor and turn checks sweep.
+    pub body_length_m: f64,
+    /// Body width, metres.
+    pub body_width_m: f64,
+    /// How far ahead of the robot's centre the sonar sits, metres.
+    pub sonar_mount_m: f64,
+    /// Full opening angle of the sonar's cone, degrees (the HC-SR04's 15°).
+    pub sonar_cone_deg: f64,
+    /// The sonar's range: no echo means nothing closer than this, metres.
+    pub sonar_max_m: f64,
+    /// Room kept between the swept body and any echo point Carto knows, metres.
+    pub clearance_m: f64,
+    /// Check every turn against the echo points: drive back or forth first so the turning body
+    /// clears them, or refuse the turn when that is not possible.
+    pub safe_turns: bool,
 
     /// Cruise speed of a FORWARD, percent.
     pub cruise_pct: f64,
@@ -138,16 +159,24 @@ pub struct CartoConfig {
 impl Default for CartoConfig {
     fn default() -> Self {
         CartoConfig {
-            cell_size_m: 0.30,
+            cell_size_m: 0.45,
             wheel_radius_m: 0.039,
             wheelbase_m: 0.20,
             track_m: 0.18,
             roller_tan: 1.0,
             encoder_counts_per_wheel_rev: 11.0 * 18.8,
             max_wheel_rpm: 300.0,
-            obstacle_threshold_cm: 30.0,
+            obstacle_threshold_cm: 45.0,
             distance_wait: Duration::from_millis(1000),
             distance_max_age: Duration::from_millis(300),
+            scan_deg: 0.0,
+            body_length_m: 0.26,
+            body_width_m: 0.24,
+            sonar_mount_m: 0.13,
+            sonar_cone_deg: 15.0,
+            sonar_max_m: 4.0,
+            clearance_m: 0.02,
+            safe_turns: true,
             cruise_pct: 30.0,
             min_drive_pct: 8.0,
             accel_pct_per_s: 120.0,
@@ -216,6 +245,11 @@ impl CartoConfig {
                 * f(profile.motor.gear_ratio),
             max_wheel_rpm: f(profile.motor.max_wheel_rpm),
             obstacle_threshold_cm: (cell * 100.0) as f32,
+            body_length_m: f(g.body_length_m),
+            body_width_m: f(g.body_width_m),
+            sonar_mount_m: f(profile.sonar.mount_x_m),
+            sonar_cone_deg: f(profile.sonar.cone_deg),
+            sonar_max_m: f(profile.sonar.max_cm) / 100.0,
             peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
             motor_baud: profile.serial.motor_baud,
             sensor_baud: profile.serial.sensor_baud,
@@ -232,6 +266,11 @@ impl CartoConfig {
     /// Wheel rim speed at 100 % drive, m/s.
     pub fn max_wheel_speed_mps(&self) -> f64 {
         self.max_wheel_rpm / 60.0 * 2.0 * core::f64::consts::PI * self.wheel_radius_m
+    }
+
+    /// Radius of the circle the body sweeps turning on the spot (half its diagonal), metres.
+    pub fn turn_radius_m(&self) -> f64 {
+        0.5 * self.body_length_m.hypot(self.body_width_m)
     }
 
     /// Half track + tan γ × half wheelbase: the lever arm of a mecanum wheel for rotation, metres

@@ -10,6 +10,7 @@ pub mod pilot;
 pub mod ratelimit;
 pub mod runtime;
 pub mod sensors;
+pub mod surroundings;
 pub mod ultrasound;
 pub mod wire;
 

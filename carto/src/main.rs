@@ -78,6 +78,14 @@ struct Args {
     /// seconds (0 = the system's keepalive, i.e. off).
     #[arg(long, value_name = "SECONDS", default_value_t = 15.0)]
     client_dead_after: f64,
+    /// Grid cell size, metres (default: the profile's): one FORWARD drives this far, and it must
+    /// be the cell size Cute and the room use. The obstacle threshold follows it (one cell).
+    #[arg(long, value_name = "METRES")]
+    cell: Option<f64>,
+    /// Before each FORWARD, look this far left and right with the sonar and refuse the move when
+    /// an echo lies in the body's path (0 = off, the default). README, "Safety checks".
+    #[arg(long, value_name = "DEGREES", default_value_t = 0.0)]
+    scan_deg: f64,
 }
 
 /// Why the main loop ended.
@@ -210,6 +218,17 @@ impl Daemon {
     fn start(args: Args, signal: Arc<AtomicUsize>) -> Result<Daemon> {
         let profile = load_profile(args.profile.as_deref())?;
         let mut cfg = CartoConfig::from_profile(&profile);
+        if let Some(cell) = args.cell {
+            if !(cell.is_finite() && (0.05..=5.0).contains(&cell)) {
+                bail!("--cell {cell}: a cell is between 0.05 and 5 metres");
+            }
+            cfg.cell_size_m = cell;
+            cfg.obstacle_threshold_cm = (cell * 100.0) as f32;
+        }
+        if !(args.scan_deg.is_finite() && (0.0..=60.0).contains(&args.scan_deg)) {
+            bail!("--scan-deg {}: between 0 and 60 degrees", args.scan_deg);
+        }
+        cfg.scan_deg = args.scan_deg;
         cfg.client_idle_limit = seconds("client-idle-limit", args.client_idle_limit)?;
         cfg.client_dead_after = seconds("client-dead-after", args.client_dead_after)?;
         let board = |which: &'static str, port: Option<String>, baud: u32| -> Result<Board> {

@@ -153,6 +153,8 @@ struct Move {
     advance_m: f64,
     /// Remaining error (signed along the move) at rest after the first stop, for learning.
     first_stop_err: Option<f64>,
+    /// A look ([`Motor::start_look`]): a turn that leaves the reference heading where it was.
+    look: bool,
 }
 
 /// The closed-loop motor controller (see the module docs).
@@ -274,10 +276,32 @@ impl Motor {
         Ok(())
     }
 
+    /// Starts a *look*: a turn on the spot to `offset_deg` (counter-clockwise) from the reference
+    /// heading, which stays where it is (the sonar scan before a FORWARD; `0.0` faces the grid
+    /// heading again). Needs a reference heading, i.e. a move before it (the scan follows the
+    /// straight reading of a FORWARD, which learns it).
+    pub fn start_look(&mut self, now: Instant, offset_deg: f64, s: &SensorState) -> Result<(), MoveError> {
+        self.fresh_yaw(now, s)?;
+        let reference = self.reference_deg.ok_or(MoveError::MissingReading { sensor: "reference heading" })?;
+        self.begin_move(now, Goal::Yaw { target_deg: reference + offset_deg }, None, 0.0, true, s);
+        Ok(())
+    }
+
+    /// The reference heading (unwrapped yaw, counter-clockwise degrees) the grid heading is at.
+    pub fn reference_deg(&self) -> Option<f64> {
+        self.reference_deg
+    }
+
+    /// Makes sure the reference heading is known (learnt from the IMU if not) and returns it.
+    pub fn learn_reference(&mut self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
+        self.hold_reference(now, s)
+    }
+
     /// Aborts any move and commands zero at once. No outcome is reported for an aborted move.
     pub fn stop(&mut self, now: Instant) {
         if let Some(m) = self.current.take()
             && let Goal::Yaw { .. } = m.goal
+            && !m.look
             && !matches!(m.phase, Phase::Rest { .. })
         {
             // A turn cut short leaves the heading between two grid headings (one still waiting
@@ -326,14 +350,15 @@ impl Motor {
                 Step::Finished(result) => {
                     self.current = None;
                     self.learn_coast(&m);
-                    if let (Ok(()), Goal::Yaw { target_deg }) = (&result, m.goal) {
+                    if let (Ok(()), Goal::Yaw { target_deg }, false) = (&result, m.goal, m.look) {
                         self.reference_deg = Some(target_deg);
                         self.odo.set_frame(target_deg);
                     }
                     if result.is_ok() && m.advance_m != 0.0 {
                         self.odo.advance(m.advance_m);
                     }
-                    if result.is_err() && matches!(m.goal, Goal::Yaw { .. }) {
+                    // A failed look leaves the reference where it was: the grid heading did not move.
+                    if result.is_err() && matches!(m.goal, Goal::Yaw { .. }) && !m.look {
                         self.reference_deg = None;
                     }
                     self.outcome = Some(result);
@@ -369,6 +394,18 @@ impl Motor {
     }
 
     fn begin(&mut self, now: Instant, goal: Goal, hold_deg: Option<f64>, advance_m: f64, s: &SensorState) {
+        self.begin_move(now, goal, hold_deg, advance_m, false, s);
+    }
+
+    fn begin_move(
+        &mut self,
+        now: Instant,
+        goal: Goal,
+        hold_deg: Option<f64>,
+        advance_m: f64,
+        look: bool,
+        s: &SensorState,
+    ) {
         self.outcome = None;
         let mut m = Move {
             goal,
@@ -378,6 +415,7 @@ impl Motor {
             hold_deg,
             advance_m,
             first_stop_err: None,
+            look,
         };
         let coasting_until = self.zeroed_at.map(|at| at + self.cfg.settle_time).filter(|until| now < *until);
         m.phase = match (goal, coasting_until) {

@@ -52,8 +52,13 @@ use robot_model::time::{Duration, Instant};
 use crate::CartoConfig;
 use crate::motor::Motor;
 use crate::sensors::SensorState;
+use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
 use robot_model::grid::{GridPose, Heading, Move};
+
+mod safety;
+
+use safety::Safety;
 
 /// A request from Cute, in Carto's terms. A command or direction byte that is not a move or a
 /// heading is kept raw (`Err(byte)`) so it can be counted and reported.
@@ -136,6 +141,12 @@ pub struct PilotCounters {
     pub batches_discarded: u64,
     /// Requests with bad values (direction > 3, `n_total` 0, command > 3).
     pub bad_values: u64,
+    /// FORWARDs refused because an echo of the scan lay in the body's path.
+    pub corridor_blocked: u64,
+    /// Turns that first drove back or forth to clear a known echo.
+    pub turns_shifted: u64,
+    /// Turns refused: no shift along the heading cleared the known echoes.
+    pub turns_refused: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -163,6 +174,12 @@ enum Stage {
     Moving { kind: Move, since: Instant },
     /// Driving back after a bumper hit.
     BackingOff,
+    /// The sonar scan before a FORWARD: look number `look` of [`Safety::looks`] runs.
+    Looking { look: usize },
+    /// Waiting for a distance reading at rest after look number `look`.
+    Reading { look: usize, since: Instant },
+    /// Driving back or forth before the turn `mv`, so the turning body clears known echoes.
+    Shifting { mv: Move },
 }
 
 /// The link session's state machine (see the module docs).
@@ -179,6 +196,10 @@ pub struct Pilot {
     rest_since: Instant,
     replies: Vec<Reply>,
     counters: PilotCounters,
+    safety: Safety,
+    surroundings: Surroundings,
+    /// A reading of the running scan never came.
+    scan_missing: bool,
 }
 
 impl Pilot {
@@ -196,6 +217,9 @@ impl Pilot {
             rest_since: Instant::ZERO,
             replies: Vec::new(),
             counters: PilotCounters::default(),
+            safety: Safety::new(cfg),
+            surroundings: Surroundings::default(),
+            scan_missing: false,
         }
     }
 
@@ -240,6 +264,7 @@ impl Pilot {
                         // the next move still ends on a cell centre.
                         if self.pose != Some(pose) {
                             motor.reset_odometry();
+                            self.surroundings.clear();
                         }
                         self.pose = Some(pose);
                     }
@@ -340,6 +365,11 @@ impl Pilot {
 
     fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {
         motor.stop(now);
+        if !matches!(self.stage, Stage::Next) {
+            // stopped in the middle of a scan or a shift: the robot may face off the grid heading
+            // and is somewhere Carto did not plan; what it saw from there is not trusted
+            self.surroundings.clear();
+        }
         self.queue.clear();
         self.current = None;
         self.batch = None;
@@ -417,15 +447,15 @@ impl Pilot {
                         Check::Pending => return,
                         Check::Obstacle { cm } => {
                             tracing::info!(cm, "obstacle ahead: no motion");
+                            self.note_reading(Some(cm), motor, sensors);
                             self.report_obstacle();
                             self.end_task(now);
                         }
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");
-                            match motor.start_next_cell(now, sensors).map(|_| ()) {
-                                Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
-                                Err(e) => self.fail(now, &e.to_string()),
-                            }
+                            self.note_reading(cm, motor, sensors);
+                            self.scan_missing = false;
+                            self.look(now, 0, motor, sensors);
                         }
                     }
                 }
@@ -454,6 +484,24 @@ impl Pilot {
                         }
                     }
                 }
+                Stage::Looking { look } => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    None | Some(Ok(())) => {
+                        self.rest_since = now;
+                        self.stage = Stage::Reading { look, since: now };
+                    }
+                    Some(Err(e)) => self.fail(now, &format!("scan before FORWARD: {e}")),
+                },
+                Stage::Reading { look, since } => {
+                    if !self.scan_reading(now, look, since, motor, sensors, us) {
+                        return;
+                    }
+                }
+                Stage::Shifting { mv } => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    None | Some(Ok(())) => self.start_turn(now, mv, motor, sensors),
+                    Some(Err(e)) => self.turn_after_failed_shift(now, mv, motor, sensors, &e.to_string()),
+                },
                 Stage::BackingOff => match motor.take_outcome() {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.end_task(now),
@@ -520,15 +568,21 @@ impl Pilot {
     fn begin_move(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
         match mv {
             Move::Forward => self.stage = Stage::Checking { since: now },
-            Move::Right | Move::Left => match motor.start_turn(now, mv == Move::Right, sensors) {
-                Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
-                Err(e) => self.fail(now, &e.to_string()),
-            },
+            Move::Right | Move::Left => self.turn_safely(now, mv, motor, sensors),
+        }
+    }
+
+    fn start_turn(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        match motor.start_turn(now, mv == Move::Right, sensors) {
+            Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
+            Err(e) => self.fail(now, &e.to_string()),
         }
     }
 
     fn move_succeeded(&mut self, kind: Move) {
         let Some(pose) = self.pose.as_mut() else {
+            // without a pose the echo points cannot follow the robot
+            self.surroundings.clear();
             return;
         };
         match kind {

@@ -27,7 +27,7 @@ impl World {
         let (listener, connector) = mem_listener(None, clock.clone());
         let (m_carto, m_board) = MemLink::pair(baud.then_some(115_200), clock.clone());
         let (s_carto, s_board) = MemLink::pair(baud.then_some(9600), clock.clone());
-        let mut cfg = CartoConfig::default();
+        let mut cfg = fake::test_config();
         if !baud {
             cfg.motor_baud = 0;
             cfg.sensor_baud = 0;
@@ -118,7 +118,7 @@ fn issue_14_idle_client_is_closed_and_the_next_served() {
     let (listener, mut connector) = mem_listener(None, clock.clone());
     let (m_carto, _m_board) = MemLink::pair(None, clock.clone());
     let (s_carto, _s_board) = MemLink::pair(None, clock.clone());
-    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..CartoConfig::default() };
+    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..fake::test_config() };
     let mut rt = CartoRuntime::new(Carto::new(cfg), listener, m_carto, s_carto);
     let mut silent = connector.connect().unwrap();
     let mut now = Instant::ZERO;

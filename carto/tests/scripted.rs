@@ -362,7 +362,7 @@ fn bumper_during_forward_stops_reports_obstacle_and_backs_off() {
 
 #[test]
 fn jammed_wheels_time_out_and_stop() {
-    let cfg = CartoConfig { move_timeout: Duration::from_secs(2), ..CartoConfig::default() };
+    let cfg = CartoConfig { move_timeout: Duration::from_secs(2), ..fake::test_config() };
     let mut h = Harness::with_config(cfg);
     h.warm_up();
     h.send(POSE);

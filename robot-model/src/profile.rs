@@ -100,7 +100,11 @@ pub struct RobotProfile {
     pub motor_board: MotorBoardParams,
     /// Sensor board firmware behaviour.
     pub sensor_board: SensorBoardParams,
-    /// Default grid cell size for this robot, metres (the design sizes a cell to the robot).
+    /// Default grid cell size for this robot, metres. Half a cell must hold the circle the body
+    /// sweeps turning on the spot (half its diagonal: 17.7 cm for 0.26 × 0.24 m) plus the 5 cm
+    /// position error a run may have, so the default is 2 × (17.7 + 4.8) cm = 0.45 m. The
+    /// design's 0.30 m leaves 15 cm to a wall on a cell line: the robot cannot turn there.
+    /// A scenario may set its own (`cell:`); every part of a run then uses that one.
     pub grid_cell_m: f32,
 }
 
@@ -369,7 +373,7 @@ impl Default for RobotProfile {
                 bumper_heartbeat_hz: 1.0,
                 peer_lost_timeout_ms: 1500,
             },
-            grid_cell_m: 0.30,
+            grid_cell_m: 0.45,
         }
     }
 }

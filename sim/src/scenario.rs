@@ -501,7 +501,11 @@ impl LoadedScenario {
         label: &str,
     ) -> Result<LoadedScenario, ScenarioError> {
         let at = |path: &[Key], message: String| ScenarioError::at(label, text, path, message);
-        let cell = scenario.cell_size(&profile);
+        // A scenario's cell size is the run's: Carto drives one of these per FORWARD, Cute's grid
+        // and the truth are cut in them (before, only the grid used it and Carto kept the profile's).
+        let mut profile = profile;
+        profile.grid_cell_m = scenario.cell_size(&profile);
+        let cell = profile.grid_cell_m;
         let frame = room_frame(&scenario.room, cell);
         let (width, height) = room_extent(&scenario.room);
         let max = MAX_CELLS as f32 * cell;

@@ -29,7 +29,7 @@
 //! use robot_model::profile::RobotProfile;
 //! let s = Scenario::from_ron_str("Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.6), (0.0, 0.6)], \
 //!     start: (row: 0, col: 0, heading: East), obstacles: [Segment(from: (0.6, 0.0), to: (0.6, 0.6))])", "t.ron").unwrap();
-//! let p = RobotProfile::default();
+//! let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
 //! let t = RobotTruth::build(room_frame(&s.room, s.cell_size(&p)), &s.room, &s.obstacle_shapes(), &p);
 //! assert!(t.is_free(0, 1) && t.is_free(0, 2));
 //! assert!(!t.can_move((0, 1), (0, 2))); // the wall lies on the line between them
@@ -213,14 +213,14 @@ mod tests {
         truth_in(1.2, 0.9, obstacles)
     }
 
-    /// A `w` × `h` m room with `obstacles`.
+    /// A `w` × `h` m room with `obstacles`, on the 0.30 m cells the documented cases are about.
     fn truth_in(w: f32, h: f32, obstacles: &str) -> RobotTruth {
         let text = format!(
             "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
              start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
         );
         let s = crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap();
-        let p = RobotProfile::default();
+        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
         RobotTruth::build(
             crate::grid::room_frame(&s.room, s.cell_size(&p)),
             &s.room,

@@ -189,7 +189,12 @@ impl SimWorld {
                     self.bumper_half_width,
                 );
         }
-        self.collisions += now_touching.difference(&self.touching).count() as u32;
+        let started = now_touching.difference(&self.touching).count() as u32;
+        if started > 0 {
+            let at = self.robot_body().map(|b| b.translation());
+            tracing::debug!(?at, front, "collision: contact started");
+        }
+        self.collisions += started;
         self.touching = now_touching;
         self.front_contact = front;
     }

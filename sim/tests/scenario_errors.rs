@@ -89,7 +89,7 @@ fn issue_12_second_fault_error_points_at_the_second_fault() {
 
 #[test]
 fn with_profile_reads_no_robot_file() {
-    let text = "Scenario(name: \"x\", robot: Some(\"missing.ron\"), room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
+    let text = "Scenario(name: \"x\", robot: Some(\"missing.ron\"), cell: Some(0.30), room: [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
     let scenario = Scenario::from_ron_str(text, "x.ron").unwrap();
     let loaded = LoadedScenario::with_profile(scenario, RobotProfile::default(), text, "x.ron").unwrap();
     assert_eq!(loaded.dt(), Duration::from_millis(5));
@@ -99,7 +99,7 @@ fn with_profile_reads_no_robot_file() {
 
 #[test]
 fn a_room_too_big_for_one_byte_coordinates_is_rejected() {
-    let text = "Scenario(name: \"big\", room: [(0.0, 0.0), (100.0, 0.0), (100.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
+    let text = "Scenario(name: \"big\", room: [(0.0, 0.0), (200.0, 0.0), (200.0, 1.0), (0.0, 1.0)], start: (row: 0, col: 0, heading: East))";
     let e = LoadedScenario::from_ron_str(text, "big.ron", Path::new(".")).unwrap_err();
     assert!(e.message.contains("256"), "{e}");
 }

@@ -55,10 +55,10 @@ impl Client {
     }
 }
 
-/// An empty 8 x 6 room (plus `obstacles`), robot in cell (2, 2) facing East.
+/// An empty 8 x 6 room of 0.30 m cells (plus `obstacles`), robot in cell (2, 2) facing East.
 fn rig(obstacles: &str) -> Rig {
     let text = format!(
-        "Scenario(name: \"rig\", room: [(0.0, 0.0), (2.5, 0.0), (2.5, 1.9), (0.0, 1.9)], \
+        "Scenario(name: \"rig\", cell: Some(0.30), room: [(0.0, 0.0), (2.5, 0.0), (2.5, 1.9), (0.0, 1.9)], \
          start: (row: 2, col: 2, heading: East), obstacles: [{obstacles}])"
     );
     let loaded = LoadedScenario::from_ron_str(&text, "rig.ron", std::path::Path::new(".")).unwrap();

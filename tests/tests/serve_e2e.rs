@@ -78,6 +78,7 @@ fn start_twin_and_carto(root: &Path, run_dir: &Path) -> (Guard, Guard, mpsc::Rec
         .arg("--sensor-port")
         .arg(run_dir.join("tty-sensor"))
         .args(["--listen", &format!("127.0.0.1:{port}"), "--profile", "scenarios/robots/mecanum-4wd.ron"])
+        .args(["--cell", "0.30"]) // scenarios/empty.ron is drawn for 0.30 m cells
         .current_dir(root)
         .stdout(Stdio::null())
         .stderr(Stdio::null())

@@ -289,9 +289,16 @@ pub struct Harness {
     dec: protocol::link::Decoder,
 }
 
+/// The default controller on 0.30 m cells with a 30 cm obstacle threshold: the grid these
+/// tests were written for (the distances they assert are multiples of it).
+#[allow(dead_code)]
+pub fn test_config() -> CartoConfig {
+    CartoConfig { cell_size_m: 0.30, obstacle_threshold_cm: 30.0, ..CartoConfig::default() }
+}
+
 impl Harness {
     pub fn new() -> Self {
-        Self::with_config(CartoConfig::default())
+        Self::with_config(test_config())
     }
 
     /// `cfg` with the line-latency correction off: the fake boards deliver instantly.

@@ -42,7 +42,8 @@ pub struct Twin {
 
 impl Twin {
     pub fn new(seed: u64) -> Self {
-        let profile = RobotProfile::default();
+        // 0.30 m cells: the distances these tests assert are written for them
+        let profile = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
         let clock = MockClock::new();
         let (listener, mut connector) = mem_listener(None, clock.clone());
         let (m_carto, m_board) = MemLink::pair(Some(profile.serial.motor_baud), clock.clone());

@@ -179,6 +179,7 @@ impl Carto {
             .args(["--transport", "tcp", "--motor-port", &format!("127.0.0.1:{motor}")])
             .args(["--sensor-port", &format!("127.0.0.1:{sensor}")])
             .args(["--listen", &format!("127.0.0.1:{port}"), "--profile", "scenarios/robots/mecanum-4wd.ron"])
+            .args(["--cell", "0.30"]) // scenarios/empty.ron is drawn for 0.30 m cells
             .args(extra)
             .env("RUST_LOG", "info")
             .env("NO_COLOR", "1")

@@ -1,0 +1,256 @@
+//! The pilot's safety checks (issue 10): the sonar scan and the swept-body check before a
+//! FORWARD, and the turning-circle check before a turn, against the echo points of
+//! [`crate::surroundings`].
+//!
+//! - **Scan.** After the straight reading of a FORWARD is clear, the robot looks
+//!   [`CartoConfig::scan_deg`] to the left, then to the right, taking one reading at rest each, and
+//!   turns back to the grid heading. A reading that does not come within
+//!   [`CartoConfig::distance_wait`] leaves the scan incomplete and the FORWARD is not driven
+//!   (never drive blind); the robot still turns back first.
+//! - **Corridor.** The FORWARD runs only if no echo point lies in the rectangle the body sweeps:
+//!   as wide as the body plus [`CartoConfig::clearance_m`] either side, from the front face to the
+//!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
+//!   threshold does). Otherwise Carto answers
+//!   `SET_OBSTACLE_POSITION` for the cell ahead, as for a close straight echo.
+//! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
+//!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
+//!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
+//!   most a quarter cell) after which the circle is clear; when none is, it refuses the turn:
+//!   the reason is logged and the command answered with `MOVE_DONE` only — the link protocol has
+//!   no message that could carry the reason, so Cute takes the turn as done (a known limit,
+//!   README "Safety checks"). A shift that ends outside its tolerance is checked again from
+//!   where the robot believes it stopped: the turn runs if the circle is clear from there.
+//!
+//! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
+//! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
+
+use robot_model::grid::{GridPose, Heading, Move};
+use robot_model::time::Instant;
+
+use super::{Pilot, Stage};
+use crate::CartoConfig;
+use crate::motor::Motor;
+use crate::sensors::SensorState;
+use crate::surroundings::Pose2;
+use crate::ultrasound::Ultrasound;
+
+/// Step of the shift search before a turn, metres.
+const SHIFT_STEP_M: f64 = 0.01;
+
+/// The geometry the checks need, from [`CartoConfig`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Safety {
+    scan_deg: f64,
+    cell_m: f64,
+    mount_m: f64,
+    half_cone_deg: f64,
+    max_range_m: f64,
+    half_length_m: f64,
+    half_width_m: f64,
+    clearance_m: f64,
+    turn_radius_m: f64,
+    safe_turns: bool,
+}
+
+impl Safety {
+    pub(super) fn new(cfg: &CartoConfig) -> Safety {
+        Safety {
+            scan_deg: cfg.scan_deg.abs(),
+            cell_m: cfg.cell_size_m,
+            mount_m: cfg.sonar_mount_m,
+            half_cone_deg: 0.5 * cfg.sonar_cone_deg,
+            max_range_m: cfg.sonar_max_m,
+            half_length_m: 0.5 * cfg.body_length_m,
+            half_width_m: 0.5 * cfg.body_width_m,
+            clearance_m: cfg.clearance_m,
+            turn_radius_m: cfg.turn_radius_m(),
+            safe_turns: cfg.safe_turns,
+        }
+    }
+
+    /// The looks of a scan, as offsets from the grid heading (counter-clockwise degrees); a
+    /// reading is taken after each but the last, which faces the grid heading again.
+    pub(super) fn looks(&self) -> &'static [f64] {
+        if self.scan_deg > 0.0 { &[1.0, -1.0, 0.0] } else { &[] }
+    }
+}
+
+/// A grid heading as a counter-clockwise angle from east, degrees.
+fn heading_deg(h: Heading) -> f64 {
+    match h {
+        Heading::East => 0.0,
+        Heading::North => 90.0,
+        Heading::West => 180.0,
+        Heading::South => -90.0,
+    }
+}
+
+impl Pilot {
+    /// Where Carto believes the robot is, in the frame of [`crate::surroundings`]: the stored
+    /// cell's centre, plus the odometry's offset, facing the grid heading plus the IMU's offset
+    /// from the reference heading. `None` without a pose from Cute.
+    pub(super) fn believed(&self, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
+        let GridPose { x: row, y: col, heading } = self.pose?;
+        let nominal = heading_deg(heading);
+        let centre = Pose2 {
+            x: f64::from(col) * self.safety.cell_m,
+            y: -f64::from(row) * self.safety.cell_m,
+            yaw_deg: nominal,
+        };
+        let off = motor.odometry().offset();
+        let (x, y) = centre.offset(off.along_m, off.left_m);
+        let turned = match (motor.reference_deg(), sensors.yaw_deg()) {
+            (Some(reference), Some(yaw)) => yaw.value - reference,
+            _ => 0.0,
+        };
+        Some(Pose2 { x, y, yaw_deg: nominal + turned })
+    }
+
+    /// Keeps a reading taken at rest: the echo `cm` from the sonar as a point (`None`: no echo),
+    /// and clears the points it saw through.
+    pub(super) fn note_reading(&mut self, cm: Option<f32>, motor: &Motor, sensors: &SensorState) {
+        if let Some(robot) = self.believed(motor, sensors) {
+            let s = self.safety;
+            let range = cm.map(|cm| f64::from(cm) / 100.0);
+            self.surroundings.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
+        }
+    }
+
+    /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
+    pub(super) fn look(&mut self, now: Instant, look: usize, motor: &mut Motor, sensors: &SensorState) {
+        let Some(&sign) = self.safety.looks().get(look) else {
+            return self.drive_forward(now, motor, sensors);
+        };
+        if look == 0
+            && let Err(e) = motor.learn_reference(now, sensors)
+        {
+            return self.fail(now, &format!("scan before FORWARD: {e}"));
+        }
+        match motor.start_look(now, sign * self.safety.scan_deg, sensors) {
+            Ok(()) => self.stage = Stage::Looking { look },
+            Err(e) => self.fail(now, &format!("scan before FORWARD: {e}")),
+        }
+    }
+
+    /// Waits for the reading after look number `look`; `false` while it has not come.
+    pub(super) fn scan_reading(
+        &mut self,
+        now: Instant,
+        look: usize,
+        since: Instant,
+        motor: &mut Motor,
+        sensors: &SensorState,
+        us: &Ultrasound,
+    ) -> bool {
+        let last = look + 1 >= self.safety.looks().len();
+        if !last {
+            match us.latest() {
+                Some(r) if r.at >= self.rest_since => {
+                    self.note_reading((r.value >= 0.0).then_some(r.value), motor, sensors);
+                }
+                _ if now.saturating_since(since) < self.distance_wait => return false,
+                _ => {
+                    tracing::warn!(look, "no distance reading at rest during the scan");
+                    self.scan_missing = true;
+                }
+            }
+        }
+        self.look(now, look + 1, motor, sensors);
+        true
+    }
+
+    /// The corridor check, then the FORWARD.
+    fn drive_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+        if self.scan_missing {
+            return self.fail(now, "scan incomplete: no distance reading at rest");
+        }
+        let s = self.safety;
+        if let Some(robot) = self.believed(motor, sensors) {
+            let along = motor.odometry().offset().along_m;
+            // along the track the move stops within its tolerance: the far end is the front face
+            // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
+            let to = s.cell_m - along + s.half_length_m;
+            let half = s.half_width_m + s.clearance_m;
+            if let Some((a, l)) = self.surroundings.first_in_corridor(robot, s.mount_m, to, half) {
+                tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
+                self.counters.corridor_blocked += 1;
+                self.report_obstacle();
+                return self.end_task(now);
+            }
+        }
+        if self.pose.is_none() {
+            self.surroundings.clear();
+        }
+        match motor.start_next_cell(now, sensors).map(|_| ()) {
+            Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
+            Err(e) => self.fail(now, &e.to_string()),
+        }
+    }
+
+    /// After a shift that did not end within tolerance: the turn runs if the circle is clear from
+    /// where the robot believes it is now.
+    pub(super) fn turn_after_failed_shift(
+        &mut self,
+        now: Instant,
+        mv: Move,
+        motor: &mut Motor,
+        sensors: &SensorState,
+        why: &str,
+    ) {
+        let radius = self.safety.turn_radius_m + self.safety.clearance_m;
+        let clear = self.believed(motor, sensors).is_none_or(|r| self.surroundings.inside_circle(r, radius).is_none());
+        if clear {
+            tracing::info!(why, "shift before a turn ended off target, but the turning circle is clear");
+            self.start_turn(now, mv, motor, sensors);
+        } else {
+            self.counters.turns_refused += 1;
+            self.fail(now, &format!("turn refused: the shift before it failed ({why})"));
+        }
+    }
+
+    /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
+    pub(super) fn turn_safely(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        let s = self.safety;
+        let radius = s.turn_radius_m + s.clearance_m;
+        let robot = match self.believed(motor, sensors) {
+            Some(robot) if s.safe_turns => robot,
+            _ => return self.start_turn(now, mv, motor, sensors),
+        };
+        let Some(hit) = self.surroundings.inside_circle(robot, radius) else {
+            return self.start_turn(now, mv, motor, sensors);
+        };
+        let steps = (0.25 * s.cell_m / SHIFT_STEP_M).floor() as i32;
+        let shift = (2..=steps)
+            .flat_map(|k| [-k, k])
+            .map(|k| f64::from(k) * SHIFT_STEP_M)
+            .find(|&d| {
+                let (x, y) = robot.offset(d, 0.0);
+                self.surroundings.inside_circle(Pose2 { x, y, ..robot }, radius).is_none()
+            });
+        match shift {
+            Some(metres) => {
+                tracing::info!(
+                    metres,
+                    echo_along_m = hit.0,
+                    echo_left_m = hit.1,
+                    "turn: driving clear of a known echo first"
+                );
+                self.counters.turns_shifted += 1;
+                match motor.start_forward(now, metres, sensors) {
+                    Ok(()) => self.stage = Stage::Shifting { mv },
+                    Err(e) => self.fail(now, &format!("shift before a turn: {e}")),
+                }
+            }
+            None => {
+                self.counters.turns_refused += 1;
+                let why = format!(
+                    "turn refused: an echo {:.0} cm ahead and {:.0} cm left lies in the turning circle and no shift of up to {:.0} cm clears it",
+                    hit.0 * 100.0,
+                    hit.1 * 100.0,
+                    0.25 * s.cell_m * 100.0
+                );
+                self.fail(now, &why);
+            }
+        }
+    }
+}

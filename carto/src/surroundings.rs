@@ -1,0 +1,217 @@
+//! What Carto has seen around the robot: the echo points of the front sonar, kept in the grid's
+//! metric frame so that a FORWARD and a turn can be checked against them (issue 10, "turns are
+//! safe", and the swept-body check before a FORWARD).
+//!
+//! Concept: the HC-SR04 sees a narrow cone (15°) straight ahead. One reading before a FORWARD
+//! covers the middle 10 cm of a 24 cm wide body's path at 40 cm; a leg or a furniture corner at
+//! the side of the path is invisible to it. So Carto keeps every echo it measured at rest as a
+//! point, placed along the sonar's central ray from the pose it believed at the time, and asks two
+//! questions of them:
+//! - [`Surroundings::first_in_corridor`]: does a point lie in the rectangle the body sweeps along
+//!   a FORWARD (as wide as the body plus a margin, from the body's front face to the front face at
+//!   the next cell's centre)?
+//! - [`Surroundings::inside_circle`]: does a point lie inside the circle the body sweeps turning
+//!   on the spot (half its diagonal plus a margin)?
+//!
+//! Frame: `x` east, `y` north, metres; a cell `(row, col)` has its centre at
+//! `(col · cell, −row · cell)`; yaw is counter-clockwise from east, degrees.
+//!
+//! A reading also says what is *not* there: nothing lies in the cone closer than its range (or,
+//! without an echo, within the sensor's range). [`Surroundings::add_reading`] removes the points
+//! it sees through, so something that has gone, or a point misplaced by dead reckoning, does not
+//! block the robot for ever.
+//!
+//! Invariants: at most [`MAX_POINTS`] points are kept (the oldest go first), and points further
+//! than [`FORGET_BEYOND_M`] from the robot are dropped when a new one is added: a stale point far
+//! behind can only be wrong (dead reckoning drifts) and never matters for the next move.
+//! A point is an estimate: the echo may come from anywhere in the cone at that range; the
+//! central ray is the best single guess, and the margins absorb the rest.
+//!
+//! ```
+//! use carto::surroundings::{Pose2, Surroundings};
+//! let mut s = Surroundings::default();
+//! let robot = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+//! s.add_echo(robot, 0.13, 0.20); // something 20 cm ahead of the front face
+//! assert!(s.first_in_corridor(robot, 0.13, 0.53, 0.13).is_some());
+//! assert!(s.inside_circle(robot, 0.19).is_none()); // 33 cm away: turning is safe
+//! ```
+
+use std::collections::VecDeque;
+
+/// Most echo points kept.
+pub const MAX_POINTS: usize = 256;
+/// Points further than this from the robot are forgotten, metres.
+pub const FORGET_BEYOND_M: f64 = 1.5;
+/// A reading clears the points this much closer than its echo (sonar noise), metres.
+const SEEN_THROUGH_MARGIN_M: f64 = 0.02;
+
+/// A believed robot pose in the grid's metric frame (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose2 {
+    /// East, metres.
+    pub x: f64,
+    /// North, metres.
+    pub y: f64,
+    /// Counter-clockwise from east, degrees.
+    pub yaw_deg: f64,
+}
+
+impl Pose2 {
+    /// The point `along` ahead and `left` to the left of this pose.
+    pub fn offset(self, along: f64, left: f64) -> (f64, f64) {
+        let (sin, cos) = self.yaw_deg.to_radians().sin_cos();
+        (self.x + along * cos - left * sin, self.y + along * sin + left * cos)
+    }
+
+    /// `(along, left)` of the point `(x, y)` seen from this pose.
+    pub fn local(self, (x, y): (f64, f64)) -> (f64, f64) {
+        let (sin, cos) = self.yaw_deg.to_radians().sin_cos();
+        let (dx, dy) = (x - self.x, y - self.y);
+        (dx * cos + dy * sin, -dx * sin + dy * cos)
+    }
+}
+
+/// Echo points around the robot (see the module docs).
+#[derive(Debug, Clone, Default)]
+pub struct Surroundings {
+    points: VecDeque<(f64, f64)>,
+}
+
+impl Surroundings {
+    /// Records an echo `range_m` from a sonar mounted `mount_m` ahead of the centre of a robot at
+    /// `robot`, along its central ray; forgets the points now far away.
+    pub fn add_echo(&mut self, robot: Pose2, mount_m: f64, range_m: f64) {
+        if !(range_m.is_finite() && range_m >= 0.0) {
+            return;
+        }
+        self.points.push_back(robot.offset(mount_m + range_m, 0.0));
+        self.points.retain(|&(x, y)| (x - robot.x).hypot(y - robot.y) <= FORGET_BEYOND_M);
+        while self.points.len() > MAX_POINTS {
+            self.points.pop_front();
+        }
+    }
+
+    /// Records a reading: clears the points inside the cone (`half_cone_deg` either side of the
+    /// central ray) closer than the echo, or than `max_range_m` for no echo (`None`), then keeps
+    /// the echo as a point.
+    pub fn add_reading(
+        &mut self,
+        robot: Pose2,
+        mount_m: f64,
+        range_m: Option<f64>,
+        half_cone_deg: f64,
+        max_range_m: f64,
+    ) {
+        let (sx, sy) = robot.offset(mount_m, 0.0);
+        let sonar = Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg };
+        let seen_through = range_m.map_or(max_range_m, |r| r - SEEN_THROUGH_MARGIN_M);
+        let tan = half_cone_deg.to_radians().tan();
+        self.points.retain(|&p| {
+            let (along, left) = sonar.local(p);
+            !(along > 0.0 && along < seen_through && left.abs() <= along * tan)
+        });
+        if let Some(r) = range_m {
+            self.add_echo(robot, mount_m, r);
+        }
+    }
+
+    /// Forgets every point (a new pose from Cute: the old points were placed from another one).
+    pub fn clear(&mut self) {
+        self.points.clear();
+    }
+
+    /// Points kept.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether no point is kept.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// The nearest point, as `(along, left)` from `robot`, inside the rectangle `from_m..=to_m`
+    /// ahead and `half_width_m` either side.
+    pub fn first_in_corridor(
+        &self,
+        robot: Pose2,
+        from_m: f64,
+        to_m: f64,
+        half_width_m: f64,
+    ) -> Option<(f64, f64)> {
+        self.points
+            .iter()
+            .map(|&p| robot.local(p))
+            .filter(|&(along, left)| along >= from_m && along <= to_m && left.abs() <= half_width_m)
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    }
+
+    /// The nearest point, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
+    pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
+        self.points
+            .iter()
+            .map(|&p| robot.local(p))
+            .filter(|&(along, left)| along.hypot(left) < radius_m)
+            .min_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MOUNT: f64 = 0.13;
+
+    #[test]
+    fn an_echo_lies_on_the_central_ray_in_the_grid_frame() {
+        let mut s = Surroundings::default();
+        // facing north (90°) from (1, 2): an echo 0.27 m away lies at (1, 2 + 0.40)
+        let robot = Pose2 { x: 1.0, y: 2.0, yaw_deg: 90.0 };
+        s.add_echo(robot, MOUNT, 0.27);
+        let east = Pose2 { x: 1.0, y: 2.0, yaw_deg: 0.0 };
+        let (along, left) = s.inside_circle(east, 0.5).expect("point kept");
+        assert!(along.abs() < 1e-9 && (left - 0.40).abs() < 1e-9, "{along} {left}");
+    }
+
+    #[test]
+    fn corridor_takes_the_nearest_point_inside_and_ignores_the_sides() {
+        let mut s = Surroundings::default();
+        let at = |yaw_deg| Pose2 { x: 0.0, y: 0.0, yaw_deg };
+        s.add_echo(at(30.0), MOUNT, 0.30); // (0.37, 0.215): left of a 0.14 half width
+        s.add_echo(at(-10.0), MOUNT, 0.25); // (0.374, -0.066): inside
+        s.add_echo(at(0.0), MOUNT, 0.20); // (0.33, 0): inside, nearer
+        let hit = s.first_in_corridor(at(0.0), MOUNT, 0.53, 0.14).expect("inside");
+        assert!((hit.0 - 0.33).abs() < 1e-9 && hit.1.abs() < 1e-9, "{hit:?}");
+        // seen from a robot turned around, all of them are behind
+        assert!(s.first_in_corridor(at(180.0), MOUNT, 0.53, 0.14).is_none());
+    }
+
+    #[test]
+    fn a_reading_clears_what_it_sees_through() {
+        let mut s = Surroundings::default();
+        let robot = Pose2::default();
+        s.add_echo(robot, MOUNT, 0.30);
+        s.add_echo(Pose2 { yaw_deg: 45.0, ..robot }, MOUNT, 0.30); // outside the cone below
+        // a longer echo straight ahead: the first point was not there after all
+        s.add_reading(robot, MOUNT, Some(0.60), 7.5, 4.0);
+        assert!(s.first_in_corridor(robot, MOUNT, 1.0, 0.05).is_some_and(|(a, _)| (a - 0.73).abs() < 1e-9));
+        assert_eq!(s.len(), 2, "the 45-degree point stays, the new echo is kept");
+        // no echo at all clears the cone up to the sensor's range
+        s.add_reading(robot, MOUNT, None, 7.5, 4.0);
+        assert_eq!(s.len(), 1);
+    }
+
+    #[test]
+    fn far_points_are_forgotten_and_the_count_is_bounded() {
+        let mut s = Surroundings::default();
+        s.add_echo(Pose2::default(), MOUNT, 0.1);
+        s.add_echo(Pose2 { x: 3.0, y: 0.0, yaw_deg: 0.0 }, MOUNT, 0.1);
+        assert_eq!(s.len(), 1, "the point near the origin is 2.8 m behind now");
+        for i in 0..(MAX_POINTS + 10) {
+            s.add_echo(Pose2 { x: 3.0, y: 0.0, yaw_deg: i as f64 }, MOUNT, 0.1);
+        }
+        assert_eq!(s.len(), MAX_POINTS);
+        s.add_echo(Pose2::default(), MOUNT, f64::NAN);
+        assert_eq!(s.len(), MAX_POINTS, "a NaN range adds nothing");
+    }
+}
