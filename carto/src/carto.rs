@@ -70,6 +70,12 @@ pub struct CartoStats {
     pub obstacles: u64,
     /// Bumper hits during a FORWARD.
     pub bumps: u64,
+    /// FORWARDs refused because a known echo lay in the body's path.
+    pub corridor_blocked: u64,
+    /// Turns that drove back or forth first to clear a known echo.
+    pub turns_shifted: u64,
+    /// Turns refused: no shift cleared the known echoes.
+    pub turns_refused: u64,
     /// Times the sensor board was declared lost.
     pub peer_lost_events: u64,
     /// Drive frames sent to the motor board.
@@ -445,6 +451,9 @@ impl Carto {
             moves_failed: p.moves_failed,
             obstacles: p.obstacles,
             bumps: p.bumps,
+            corridor_blocked: p.corridor_blocked,
+            turns_shifted: p.turns_shifted,
+            turns_refused: p.turns_refused,
             ..self.stats
         }
     }

@@ -10,7 +10,7 @@
 //! the move up without moving (fail safe: never drive blind).
 //!
 //! Invariants:
-//! - a reading at or below the threshold (default one cell, 30 cm) is an obstacle;
+//! - a reading at or below the threshold (default one cell: 45 cm for the default 0.45 m cell) is an obstacle;
 //! - a negative reading (−1.0 = no echo) is clear: nothing within the sensor's 4 m range;
 //! - readings with an error status, NaN or infinity are dropped and counted, never used.
 //!

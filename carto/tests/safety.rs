@@ -1,0 +1,100 @@
+//! Issue 10, "turns are safe": Carto checks turns and FORWARDs against the sonar echoes it
+//! remembers (`carto::surroundings`, `pilot/safety.rs`), with the kinematic fake robot of `fake/`.
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+mod fake;
+
+use carto::CartoConfig;
+use fake::{Harness, POSE};
+use protocol::link::{Command, GuiMessage};
+
+fn cartography(command: Command) -> GuiMessage {
+    GuiMessage::SendMoveCartography { command }
+}
+
+fn ready_with(cfg: CartoConfig) -> Harness {
+    let mut h = Harness::with_config(cfg);
+    h.warm_up();
+    h.send(POSE);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::RobotPositionReceived]);
+    h.replies.clear();
+    h
+}
+
+/// A FORWARD against a wall `cm` ahead: refused, the echo remembered.
+fn blocked_forward(h: &mut Harness, cm: f32) {
+    h.robot.distance_cm = cm;
+    h.run_ms(150);
+    let done = h.move_done_count();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(3000, |h| h.move_done_count() == done + 1));
+    assert!(h.reply_msgs().contains(&GuiMessage::SetObstaclePosition { x: 5, y: 6 }) || done > 0);
+}
+
+#[test]
+fn a_turn_beside_a_wall_ahead_backs_off_first() {
+    let mut h = ready_with(fake::test_config());
+    blocked_forward(&mut h, 3.0); // the wall 16 cm from the centre, inside the 19.7 cm circle
+    let x0 = h.robot.x;
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 2), "no MOVE_DONE for the turn");
+    let stats = h.carto.stats();
+    assert_eq!((stats.turns_shifted, stats.turns_refused), (1, 0));
+    // it backed off (west, -x) far enough that the circle clears the echo, then turned
+    let back = x0 - h.robot.x;
+    assert!((0.03..=0.06).contains(&back), "backed off {back:.3} m");
+    assert!((h.robot.yaw.to_degrees() + 90.0).abs() <= 2.0, "yaw {:.1}", h.robot.yaw.to_degrees());
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::South));
+}
+
+#[test]
+fn a_turn_between_two_close_walls_is_refused() {
+    let mut h = ready_with(fake::test_config());
+    blocked_forward(&mut h, 3.0); // wall east, 16 cm from the centre
+    h.send(cartography(Command::Right));
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
+    // facing west, 3-4 cm west of the centre after the first shift: a wall 3 cm ahead again
+    h.robot.distance_cm = 3.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(3000, |h| h.move_done_count() == 4));
+    let yaw = h.robot.yaw;
+    h.send(cartography(Command::Left));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 5));
+    assert_eq!(h.carto.stats().turns_refused, 1, "{:?}", h.carto.stats());
+    assert!((h.robot.yaw - yaw).abs() < 0.02, "the robot turned although it refused");
+    assert_eq!(h.reply_msgs().last(), Some(&GuiMessage::MoveDone));
+}
+
+#[test]
+fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
+    let mut h = ready_with(CartoConfig { scan_deg: 30.0, ..fake::test_config() });
+    h.robot.distance_cm = 80.0; // straight ahead: clear
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    // once the robot has turned away from the grid heading, the sonar sees something close:
+    // 12 cm at 30 degrees lies 12-13 cm left of the track, inside the 14 cm half corridor
+    assert!(h.run_until(3000, |h| h.robot.yaw.to_degrees() > 10.0), "no look to the left");
+    h.robot.distance_cm = 12.0;
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().corridor_blocked, 1);
+    assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
+    assert!(h.robot.yaw.to_degrees().abs() <= 2.5, "left facing {:.1} deg", h.robot.yaw.to_degrees());
+}
+
+#[test]
+fn the_scan_drives_when_the_path_is_clear() {
+    let mut h = ready_with(CartoConfig { scan_deg: 30.0, ..fake::test_config() });
+    h.robot.distance_cm = 80.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let looked_left = h.robot.drives_since(robot_model::time::Instant::ZERO).iter().any(|(_, d)| d.omega > 0);
+    let looked_right = h.robot.drives_since(robot_model::time::Instant::ZERO).iter().any(|(_, d)| d.omega < 0);
+    assert!(looked_left && looked_right, "no scan");
+    assert!((h.distance_from(0.0, 0.0) - 0.30).abs() <= 0.015);
+}
