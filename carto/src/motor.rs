@@ -282,7 +282,8 @@ impl Motor {
     /// straight reading of a FORWARD, which learns it).
     pub fn start_look(&mut self, now: Instant, offset_deg: f64, s: &SensorState) -> Result<(), MoveError> {
         self.fresh_yaw(now, s)?;
-        let reference = self.reference_deg.ok_or(MoveError::MissingReading { sensor: "reference heading" })?;
+        let reference =
+            self.reference_deg.ok_or(MoveError::MissingReading { sensor: "reference heading" })?;
         self.begin_move(now, Goal::Yaw { target_deg: reference + offset_deg }, None, 0.0, true, s);
         Ok(())
     }

@@ -94,7 +94,8 @@ fn the_scan_drives_when_the_path_is_clear() {
     assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     let looked_left = h.robot.drives_since(robot_model::time::Instant::ZERO).iter().any(|(_, d)| d.omega > 0);
-    let looked_right = h.robot.drives_since(robot_model::time::Instant::ZERO).iter().any(|(_, d)| d.omega < 0);
+    let looked_right =
+        h.robot.drives_since(robot_model::time::Instant::ZERO).iter().any(|(_, d)| d.omega < 0);
     assert!(looked_left && looked_right, "no scan");
     assert!((h.distance_from(0.0, 0.0) - 0.30).abs() <= 0.015);
 }

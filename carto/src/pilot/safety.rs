@@ -198,7 +198,9 @@ impl Pilot {
         why: &str,
     ) {
         let radius = self.safety.turn_radius_m + self.safety.clearance_m;
-        let clear = self.believed(motor, sensors).is_none_or(|r| self.surroundings.inside_circle(r, radius).is_none());
+        let clear = self
+            .believed(motor, sensors)
+            .is_none_or(|r| self.surroundings.inside_circle(r, radius).is_none());
         if clear {
             tracing::info!(why, "shift before a turn ended off target, but the turning circle is clear");
             self.start_turn(now, mv, motor, sensors);
@@ -220,13 +222,10 @@ impl Pilot {
             return self.start_turn(now, mv, motor, sensors);
         };
         let steps = (0.25 * s.cell_m / SHIFT_STEP_M).floor() as i32;
-        let shift = (2..=steps)
-            .flat_map(|k| [-k, k])
-            .map(|k| f64::from(k) * SHIFT_STEP_M)
-            .find(|&d| {
-                let (x, y) = robot.offset(d, 0.0);
-                self.surroundings.inside_circle(Pose2 { x, y, ..robot }, radius).is_none()
-            });
+        let shift = (2..=steps).flat_map(|k| [-k, k]).map(|k| f64::from(k) * SHIFT_STEP_M).find(|&d| {
+            let (x, y) = robot.offset(d, 0.0);
+            self.surroundings.inside_circle(Pose2 { x, y, ..robot }, radius).is_none()
+        });
         match shift {
             Some(metres) => {
                 tracing::info!(
