@@ -63,6 +63,13 @@ pub struct CartoConfig {
     pub sonar_max_m: f64,
     /// Room kept between the swept body and any echo point Carto knows, metres.
     pub clearance_m: f64,
+    /// Correct the position along the track with the range to a wall ahead (`pilot/safety.rs`,
+    /// "Along-track fix"), weighing the sonar against the wheels by the two sigmas below.
+    pub along_fix: bool,
+    /// Standard deviation of one sonar reading, metres (the profile's noise).
+    pub sonar_sigma_m: f64,
+    /// Standard deviation of the wheels' distance per metre driven (slip, stop error), metres.
+    pub odometry_sigma_per_m: f64,
     /// Check every turn against the echo points: drive back or forth first so the turning body
     /// clears them, or refuse the turn when that is not possible.
     pub safe_turns: bool,
@@ -177,6 +184,9 @@ impl Default for CartoConfig {
             sonar_max_m: 4.0,
             clearance_m: 0.02,
             safe_turns: true,
+            along_fix: true,
+            sonar_sigma_m: 0.003,
+            odometry_sigma_per_m: 0.01,
             cruise_pct: 30.0,
             min_drive_pct: 8.0,
             accel_pct_per_s: 120.0,
@@ -249,6 +259,7 @@ impl CartoConfig {
             body_width_m: f(g.body_width_m),
             sonar_mount_m: f(profile.sonar.mount_x_m),
             sonar_cone_deg: f(profile.sonar.cone_deg),
+            sonar_sigma_m: f(profile.sonar.noise_sigma_cm) / 100.0,
             sonar_max_m: f(profile.sonar.max_cm) / 100.0,
             peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
             motor_baud: profile.serial.motor_baud,

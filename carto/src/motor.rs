@@ -253,6 +253,12 @@ impl Motor {
         Ok(())
     }
 
+    /// Corrects the odometry's position along the heading by `metres` (see
+    /// [`Odometry::correct_along`]); the next FORWARD, which aims at a cell centre, drives it away.
+    pub fn correct_along(&mut self, metres: f64) {
+        self.odo.correct_along(metres);
+    }
+
     /// The robot is at the centre of its cell: Cute sent a fresh pose (`SEND_ROBOT_POSITION`).
     pub fn reset_odometry(&mut self) {
         self.odo.reset();

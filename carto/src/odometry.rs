@@ -114,6 +114,12 @@ impl Odometry {
         self.offset = CellOffset::default();
     }
 
+    /// An outside measurement says the robot is `metres` further along the nominal heading than
+    /// the wheels say (negative: less far), e.g. the sonar range to a wall ahead.
+    pub fn correct_along(&mut self, metres: f64) {
+        self.offset.along_m += metres;
+    }
+
     /// The robot now believes it is in the cell `metres` ahead: the origin moves there.
     pub fn advance(&mut self, metres: f64) {
         self.offset.along_m -= metres;

@@ -200,6 +200,8 @@ pub struct Pilot {
     surroundings: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,
+    /// The last straight reading at rest, for the along-track fix of the next one.
+    last_straight: Option<safety::Straight>,
 }
 
 impl Pilot {
@@ -220,6 +222,7 @@ impl Pilot {
             safety: Safety::new(cfg),
             surroundings: Surroundings::default(),
             scan_missing: false,
+            last_straight: None,
         }
     }
 
@@ -265,6 +268,7 @@ impl Pilot {
                         if self.pose != Some(pose) {
                             motor.reset_odometry();
                             self.surroundings.clear();
+                            self.last_straight = None;
                         }
                         self.pose = Some(pose);
                     }
@@ -365,6 +369,7 @@ impl Pilot {
 
     fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {
         motor.stop(now);
+        self.last_straight = None;
         if !matches!(self.stage, Stage::Next) {
             // stopped in the middle of a scan or a shift: the robot may face off the grid heading
             // and is somewhere Carto did not plan; what it saw from there is not trusted
@@ -447,12 +452,16 @@ impl Pilot {
                         Check::Pending => return,
                         Check::Obstacle { cm } => {
                             tracing::info!(cm, "obstacle ahead: no motion");
+                            if !sensors.bumper_pressed() {
+                                self.along_fix(Some(cm), motor);
+                            }
                             self.note_reading(Some(cm), motor, sensors);
                             self.report_obstacle();
                             self.end_task(now);
                         }
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");
+                            self.along_fix(cm, motor);
                             self.note_reading(cm, motor, sensors);
                             self.scan_missing = false;
                             self.look(now, 0, motor, sensors);

@@ -16,10 +16,11 @@
 //! Frame: `x` east, `y` north, metres; a cell `(row, col)` has its centre at
 //! `(col · cell, −row · cell)`; yaw is counter-clockwise from east, degrees.
 //!
-//! A reading also says what is *not* there: nothing lies in the cone closer than its range (or,
-//! without an echo, within the sensor's range). [`Surroundings::add_reading`] removes the points
-//! it sees through, so something that has gone, or a point misplaced by dead reckoning, does not
-//! block the robot for ever.
+//! An echo also says what is *not* there: nothing lies in the cone closer than its range.
+//! [`Surroundings::add_reading`] removes the points it sees through, so something that has gone,
+//! or a point misplaced by dead reckoning, does not block the robot for ever. A reading without
+//! echo clears nothing: a surface turned more than the sensor's incidence limit away returns no
+//! echo (specular loss), so "no echo" does not mean "nothing there".
 //!
 //! Invariants: at most [`MAX_POINTS`] points are kept (the oldest go first), and points further
 //! than [`FORGET_BEYOND_M`] from the robot are dropped when a new one is added: a stale point far
@@ -92,8 +93,8 @@ impl Surroundings {
     }
 
     /// Records a reading: clears the points inside the cone (`half_cone_deg` either side of the
-    /// central ray) closer than the echo, or than `max_range_m` for no echo (`None`), then keeps
-    /// the echo as a point.
+    /// central ray) closer than the echo and keeps the echo as a point; no echo (`None`) changes
+    /// nothing (see the module docs). `max_range_m` bounds what an echo can clear.
     pub fn add_reading(
         &mut self,
         robot: Pose2,
@@ -104,15 +105,16 @@ impl Surroundings {
     ) {
         let (sx, sy) = robot.offset(mount_m, 0.0);
         let sonar = Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg };
-        let seen_through = range_m.map_or(max_range_m, |r| r - SEEN_THROUGH_MARGIN_M);
+        let Some(range_m) = range_m else {
+            return;
+        };
+        let seen_through = range_m.min(max_range_m) - SEEN_THROUGH_MARGIN_M;
         let tan = half_cone_deg.to_radians().tan();
         self.points.retain(|&p| {
             let (along, left) = sonar.local(p);
             !(along > 0.0 && along < seen_through && left.abs() <= along * tan)
         });
-        if let Some(r) = range_m {
-            self.add_echo(robot, mount_m, r);
-        }
+        self.add_echo(robot, mount_m, range_m);
     }
 
     /// Forgets every point (a new pose from Cute: the old points were placed from another one).
@@ -196,9 +198,9 @@ mod tests {
         s.add_reading(robot, MOUNT, Some(0.60), 7.5, 4.0);
         assert!(s.first_in_corridor(robot, MOUNT, 1.0, 0.05).is_some_and(|(a, _)| (a - 0.73).abs() < 1e-9));
         assert_eq!(s.len(), 2, "the 45-degree point stays, the new echo is kept");
-        // no echo at all clears the cone up to the sensor's range
+        // no echo clears nothing: a slanted surface may simply not answer
         s.add_reading(robot, MOUNT, None, 7.5, 4.0);
-        assert_eq!(s.len(), 1);
+        assert_eq!(s.len(), 2);
     }
 
     #[test]
