@@ -100,22 +100,28 @@ fn the_scan_drives_when_the_path_is_clear() {
     assert!((h.distance_from(0.0, 0.0) - 0.30).abs() <= 0.015);
 }
 
-#[test]
-fn the_range_ahead_corrects_the_position_along_the_track() {
+/// Two FORWARDs east, the range ahead 100 cm before the first and `cm_after` before the second;
+/// where the first ended and how far the second drove.
+fn two_forwards_with_ranges(cm_after: f32) -> (f64, f64) {
     let mut h = ready_with(fake::test_config());
     h.robot.distance_cm = 100.0;
     h.run_ms(150);
     h.send(cartography(Command::Forward));
     assert!(h.run_until(8000, |h| h.move_done_count() == 1));
     let x1 = h.robot.x;
-    // the wheels say one cell (30 cm); the wall ahead came 34 cm closer: the robot went 4 cm
-    // further than it believes (slip). Gain σw²/(σw² + 2σs²) with σw = 3 mm (1 %/m over 0.30 m)
-    // and σs = 3 mm: 1/3 of it comes off the next FORWARD
-    h.robot.distance_cm = 66.0;
+    h.robot.distance_cm = cm_after;
     h.run_ms(150);
     h.send(cartography(Command::Forward));
     assert!(h.run_until(8000, |h| h.move_done_count() == 2));
-    let second = h.robot.x - x1;
+    (x1, h.robot.x - x1)
+}
+
+#[test]
+fn the_range_ahead_corrects_the_position_along_the_track() {
+    // the wheels say one cell (30 cm); the wall ahead came 34 cm closer: the robot went 4 cm
+    // further than it believes (slip). Gain σw²/(σw² + 2σs²) with σw = 3 mm (1 %/m over 0.30 m)
+    // and σs = 3 mm: 1/3 of it comes off the next FORWARD
+    let (x1, second) = two_forwards_with_ranges(66.0);
     let gain = 0.003f64.powi(2) / (0.003f64.powi(2) + 2.0 * 0.003f64.powi(2));
     let expected = 0.30 - (x1 - 0.30) - gain * (0.34 - x1);
     assert!((second - expected).abs() <= 0.01, "second FORWARD drove {second:.4} m, expected {expected:.4}");
@@ -124,16 +130,7 @@ fn the_range_ahead_corrects_the_position_along_the_track() {
 
 #[test]
 fn a_range_that_disagrees_too_much_is_another_object_and_is_ignored() {
-    let mut h = ready_with(fake::test_config());
-    h.robot.distance_cm = 100.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
-    let x1 = h.robot.x;
-    h.robot.distance_cm = 50.0; // 50 cm closer after a 30 cm move: not the same wall
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 2));
-    let second = h.robot.x - x1;
+    // 50 cm closer after a 30 cm move: not the same wall
+    let (x1, second) = two_forwards_with_ranges(50.0);
     assert!((second - (0.30 - (x1 - 0.30))).abs() <= 0.01, "drove {second:.4} m");
 }

@@ -1,0 +1,78 @@
+//! Starting a command: checks that it can run (a pose, the grid, both boards, fresh readings),
+//! then the obstacle check of a FORWARD or the (safe) turn.
+
+use robot_model::grid::Move;
+use robot_model::time::Instant;
+
+use super::{Pilot, Stage, TaskKind};
+use crate::motor::Motor;
+use crate::sensors::SensorState;
+
+use super::Health;
+
+impl Pilot {
+    pub(super) fn start_command(
+        &mut self,
+        now: Instant,
+        kind: TaskKind,
+        command: Result<Move, u8>,
+        motor: &mut Motor,
+        sensors: &SensorState,
+        health: Health,
+    ) {
+        let mv = match command {
+            Ok(mv) => mv,
+            Err(other) => {
+                self.counters.bad_values += 1;
+                match kind {
+                    TaskKind::Cartography => {
+                        tracing::warn!(command = other, "cartography command is not a move");
+                        self.counters.moves_failed += 1;
+                        self.end_task(now);
+                    }
+                    TaskKind::Trajectory => {
+                        tracing::warn!(command = other, "trajectory command is not a move: skipped");
+                    }
+                }
+                return;
+            }
+        };
+        if kind == TaskKind::Cartography && self.pose.is_none() {
+            return self.fail(now, "no robot position yet");
+        }
+        if mv == Move::Forward && self.pose.is_some_and(|p| p.ahead().is_none()) {
+            return self.fail(now, "the cell ahead is off the grid");
+        }
+        if !health.motor_board {
+            return self.fail(now, "motor board lost");
+        }
+        if !health.sensor_board {
+            return self.fail(now, "sensor board lost");
+        }
+        if self.readings_fresh(now, sensors) {
+            self.begin_move(now, mv, motor, sensors);
+        } else {
+            self.stage = Stage::Waiting { mv, since: now };
+        }
+    }
+
+    /// Whether encoder counts and the IMU heading are both recent enough to start a move.
+    pub(super) fn readings_fresh(&self, now: Instant, sensors: &SensorState) -> bool {
+        let fresh = |at: Instant| now.saturating_since(at) <= self.stale_after;
+        sensors.counts().is_some_and(|c| fresh(c.at)) && sensors.yaw_deg().is_some_and(|y| fresh(y.at))
+    }
+
+    pub(super) fn begin_move(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        match mv {
+            Move::Forward => self.stage = Stage::Checking { since: now },
+            Move::Right | Move::Left => self.turn_safely(now, mv, motor, sensors),
+        }
+    }
+
+    pub(super) fn start_turn(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        match motor.start_turn(now, mv == Move::Right, sensors) {
+            Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
+            Err(e) => self.fail(now, &e.to_string()),
+        }
+    }
+}
