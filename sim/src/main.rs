@@ -116,11 +116,12 @@ fn window(
 ) -> Result<ExitCode> {
     let mut run = Lockstep::new(LoadedScenario::load_or_default(scenario.as_deref())?, seed)?;
     let recorder = recorder(&mut run, mcap, foxglove)?;
-    let ok = sim::app::run_window(run, shot)?;
+    let ok = sim::app::run_window(run, shot);
+    // The file is closed whatever the window did.
     if let Some(r) = recorder {
         r.finish(None)?;
     }
-    Ok(if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+    Ok(if ok? { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
 /// A recorder on `run` when MCAP output (file, lz4) or a live server is asked for.
@@ -210,11 +211,12 @@ fn sim_serve(args: &ServeArgs) -> Result<ExitCode> {
     };
     let mut publisher = recorder.as_ref().map(|r| r.twin_publisher(&loaded));
     let clock = transport::WallClock::start();
-    serve::serve(&loaded, args.seed, &options, &clock, &stop, publisher.as_mut(), ready, status)?;
+    let served = serve::serve(&loaded, args.seed, &options, &clock, &stop, publisher.as_mut(), ready, status);
     drop(publisher);
     if let Some(r) = recorder {
         r.finish(None)?;
     }
+    served?;
     println!("twin stopped");
     Ok(ExitCode::SUCCESS)
 }
