@@ -93,6 +93,9 @@ pub struct WindowArgs {
     /// Seed for every random process (default: the scenario's).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Serve the run live over the Foxglove WebSocket protocol (default address 127.0.0.1:8765).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::viz::DEFAULT_ADDR)]
+    pub foxglove: Option<std::net::SocketAddr>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub shot: ScreenshotArgs,

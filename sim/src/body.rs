@@ -122,6 +122,11 @@ impl RobotBody {
         self.sonar.latest()
     }
 
+    /// Sonar measurements taken so far.
+    pub fn sonar_measurements(&self) -> u64 {
+        self.sonar.measurements()
+    }
+
     /// The rays of the latest sonar measurement.
     pub fn last_rays(&self) -> &[CastRay] {
         &self.last_rays

@@ -24,6 +24,7 @@ pub mod sweep;
 pub mod truth;
 pub mod truthimg;
 pub mod twin;
+pub mod viz;
 #[cfg(feature = "window")]
 pub mod window;
 pub mod wiretool;

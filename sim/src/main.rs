@@ -1,6 +1,7 @@
 //! `explobot`: the twin's command-line tool. Parses arguments and calls the `sim` library; the
 //! argument structs of the subcommands live beside the code they drive.
 
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant as WallInstant;
@@ -15,7 +16,9 @@ use sim::replay::ReplayArgs;
 use sim::runner::Lockstep;
 use sim::scenario::LoadedScenario;
 use sim::serve::{self, ServeArgs};
+use sim::viz::Recorder;
 use sim::wiretool;
+use tracing_subscriber::prelude::*;
 
 #[derive(Parser)]
 #[command(
@@ -64,15 +67,18 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()),
-        )
+    // Events go to stderr as filtered by RUST_LOG, and to the MCAP/Foxglove log of the run being
+    // stepped on the same thread, if any (sim::viz::logs).
+    let stderr = tracing_subscriber::fmt::layer()
         .with_writer(std::io::stderr)
-        .init();
+        .with_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()));
+    tracing_subscriber::registry().with(stderr).with(sim::viz::logs::layer()).init();
     let result = match Cli::parse().command.unwrap_or(Command::Run(RunArgs::default_room())) {
-        Command::Run(args) if args.wants_window() => window(args.scenario, args.seed, &args.shot),
-        Command::Window(args) => window(args.scenario, args.seed, &args.shot),
+        Command::Run(args) if args.wants_window() => {
+            let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
+            window(args.scenario, args.seed, &args.shot, args.foxglove, mcap)
+        }
+        Command::Window(args) => window(args.scenario, args.seed, &args.shot, args.foxglove, None),
         Command::Run(args) => run(args),
         Command::Sim(args) => sim_serve(&args),
         Command::Decode(args) => args.decode().map_err(anyhow::Error::from).map(|text| {
@@ -83,7 +89,7 @@ fn main() -> ExitCode {
             println!("{}", wiretool::to_hex(&bytes));
             ExitCode::SUCCESS
         }),
-        Command::Replay(args) => replay(&args.recording),
+        Command::Replay(args) => replay(&args.recording, args.mcap.as_deref().map(|p| (p, args.mcap_lz4))),
         Command::Bench(args) => bench_cmd(&args),
         Command::Check { scenarios } => check(&scenarios),
         Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),
@@ -99,31 +105,91 @@ fn main() -> ExitCode {
     }
 }
 
-/// `explobot window` / `explobot run --window`: the interactive window, or one screenshot of it.
-fn window(scenario: Option<PathBuf>, seed: Option<u64>, shot: &ScreenshotArgs) -> Result<ExitCode> {
-    let run = Lockstep::new(LoadedScenario::load_or_default(scenario.as_deref())?, seed)?;
-    Ok(if sim::app::run_window(run, shot)? { ExitCode::SUCCESS } else { ExitCode::FAILURE })
+/// `explobot window` / `explobot run --window`: the interactive window, or one screenshot of it;
+/// served live with `--foxglove`, recorded with `--mcap`.
+fn window(
+    scenario: Option<PathBuf>,
+    seed: Option<u64>,
+    shot: &ScreenshotArgs,
+    foxglove: Option<SocketAddr>,
+    mcap: Option<(&Path, bool)>,
+) -> Result<ExitCode> {
+    let mut run = Lockstep::new(LoadedScenario::load_or_default(scenario.as_deref())?, seed)?;
+    let recorder = recorder(&mut run, mcap, foxglove)?;
+    let ok = sim::app::run_window(run, shot);
+    // The file is closed whatever the window did.
+    if let Some(r) = recorder {
+        r.finish(None)?;
+    }
+    Ok(if ok? { ExitCode::SUCCESS } else { ExitCode::FAILURE })
 }
 
-/// Runs `loaded` to the end headless; the run and its wall time in seconds.
-fn run_headless(loaded: LoadedScenario, seed: Option<u64>, quiet: bool) -> Result<(Lockstep, f64)> {
-    let lockstep = Lockstep::new(loaded, seed)?;
+/// A recorder on `run` when MCAP output (file, lz4) or a live server is asked for.
+fn recorder(
+    run: &mut Lockstep,
+    mcap: Option<(&Path, bool)>,
+    foxglove: Option<SocketAddr>,
+) -> Result<Option<Recorder>> {
+    if mcap.is_none() && foxglove.is_none() {
+        return Ok(None);
+    }
+    let mut recorder = Recorder::new();
+    if let Some((path, lz4)) = mcap {
+        recorder = recorder.write_mcap(path, lz4)?;
+    }
+    if let Some(addr) = foxglove {
+        recorder = recorder.serve(addr)?;
+        let port = recorder.port().unwrap_or(addr.port());
+        println!("foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)", addr.ip());
+    }
+    run.set_observer(Box::new(recorder.publisher(run)));
+    Ok(Some(recorder))
+}
+
+/// Runs `loaded` to the end headless, recording to `mcap` if given; the run, its wall time in
+/// seconds, and the recorder to finish.
+fn run_headless(
+    loaded: LoadedScenario,
+    seed: Option<u64>,
+    quiet: bool,
+    mcap: Option<(&Path, bool)>,
+) -> Result<(Lockstep, f64, Option<Recorder>)> {
+    let mut lockstep = Lockstep::new(loaded, seed)?;
+    let recorder = recorder(&mut lockstep, mcap, None)?;
     let bar = output::Progress::new(&lockstep, quiet);
     let start = WallInstant::now();
     let run = sim::app::run_headless(lockstep, |sim| bar.show(sim))?;
     let wall = start.elapsed().as_secs_f64();
     bar.finish();
-    Ok((run, wall))
+    Ok((run, wall, recorder))
+}
+
+/// Logs the report and closes the MCAP file, if one is being written.
+fn finish_mcap(
+    recorder: Option<Recorder>,
+    run: &Lockstep,
+    report: &sim::report::Report,
+    mcap: Option<(&Path, bool)>,
+) -> Result<()> {
+    if let Some(r) = recorder {
+        r.finish(Some((report, run.now())))?;
+    }
+    if let Some((path, _)) = mcap {
+        println!("wrote {}", path.display());
+    }
+    Ok(())
 }
 
 fn run(args: RunArgs) -> Result<ExitCode> {
     let loaded = LoadedScenario::load_or_default(args.scenario.as_deref())?;
     let out = args.out.unwrap_or_else(|| output::default_out_dir(&loaded.scenario.name));
-    let (run, wall) = run_headless(loaded, args.seed, args.quiet)?;
+    let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
+    let (run, wall, recorder) = run_headless(loaded, args.seed, args.quiet, mcap)?;
     let report = run.report(wall);
     print!("{}", report.to_text());
     output::write_outputs(&out, &run, &report)?;
     println!("wrote {}/report.json, map.png, links.rec", out.display());
+    finish_mcap(recorder, &run, &report, mcap)?;
     Ok(if report.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
@@ -134,18 +200,35 @@ fn sim_serve(args: &ServeArgs) -> Result<ExitCode> {
     let ready =
         |motor: &str, sensor: &str| println!("{}", args.ready_text(&loaded.scenario.name, motor, sensor));
     let status = |now, twin: &sim::twin::Twin| println!("{}", serve::status_line(now, twin));
-    serve::serve(&loaded, args.seed, &options, &transport::WallClock::start(), &stop, ready, status)?;
+    let recorder = match args.foxglove {
+        Some(addr) => {
+            let r = Recorder::new().serve(addr)?;
+            let port = r.port().unwrap_or(addr.port());
+            println!("foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)", addr.ip());
+            Some(r)
+        }
+        None => None,
+    };
+    let mut publisher = recorder.as_ref().map(|r| r.twin_publisher(&loaded));
+    let clock = transport::WallClock::start();
+    let served = serve::serve(&loaded, args.seed, &options, &clock, &stop, publisher.as_mut(), ready, status);
+    drop(publisher);
+    if let Some(r) = recorder {
+        r.finish(None)?;
+    }
+    served?;
     println!("twin stopped");
     Ok(ExitCode::SUCCESS)
 }
 
-fn replay(path: &Path) -> Result<ExitCode> {
+fn replay(path: &Path, mcap: Option<(&Path, bool)>) -> Result<ExitCode> {
     let rec = Recording::load(path)?;
     let loaded = sim::replay::rebuild(&rec)?;
     println!("replaying {} (seed {}) ...", rec.scenario_label, rec.seed);
-    let (run, _) = run_headless(loaded, Some(rec.seed), true)?;
+    let (run, wall, recorder) = run_headless(loaded, Some(rec.seed), true, mcap)?;
     let (same, line) = sim::replay::verdict(&rec, run.link_logs());
     println!("{line}");
+    finish_mcap(recorder, &run, &run.report(wall), mcap)?;
     Ok(if same { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
@@ -159,7 +242,7 @@ fn bench_cmd(args: &BenchArgs) -> Result<ExitCode> {
     if !args.physics_only {
         println!("\n{}", bench::full_stack_header());
         for loaded in scenarios {
-            let (run, wall) = run_headless(loaded, None, true)?;
+            let (run, wall, _) = run_headless(loaded, None, true, None)?;
             println!("{}", bench::full_stack_row(&run.report(wall)));
         }
     }

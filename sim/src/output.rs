@@ -44,6 +44,16 @@ pub struct RunArgs {
     /// Open the interactive window instead (world beside Cute's map; feature `window`).
     #[arg(long)]
     pub window: bool,
+    /// Also write the whole run as an MCAP file (open it in Foxglove or Lichtblick).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    /// Compress the MCAP file's chunks with lz4 (about a third of the size, a slower run).
+    #[arg(long, requires = "mcap")]
+    pub mcap_lz4: bool,
+    /// Serve the run live over the Foxglove WebSocket protocol while the window shows it
+    /// (implies --window; default address 127.0.0.1:8765).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::viz::DEFAULT_ADDR)]
+    pub foxglove: Option<std::net::SocketAddr>,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub shot: ScreenshotArgs,
@@ -58,13 +68,19 @@ impl RunArgs {
             out: None,
             quiet: false,
             window: false,
+            mcap: None,
+            mcap_lz4: false,
+            foxglove: None,
             shot: ScreenshotArgs::none(),
         }
     }
 
-    /// Whether the run is asked for in the window (`--window`, or a screenshot).
+    /// Whether the run is asked for in the window (`--window`, `--foxglove`, or a screenshot).
     pub fn wants_window(&self) -> bool {
-        self.window || self.shot.screenshot.is_some() || self.shot.status_file.is_some()
+        self.window
+            || self.foxglove.is_some()
+            || self.shot.screenshot.is_some()
+            || self.shot.status_file.is_some()
     }
 }
 

@@ -22,6 +22,12 @@ use crate::scenario::{LoadedScenario, Scenario, ScenarioError};
 pub struct ReplayArgs {
     /// The recording.
     pub recording: PathBuf,
+    /// Also write the replayed run as an MCAP file (see `explobot run --mcap`).
+    #[arg(long, value_name = "FILE")]
+    pub mcap: Option<PathBuf>,
+    /// Compress the MCAP file's chunks with lz4.
+    #[arg(long, requires = "mcap")]
+    pub mcap_lz4: bool,
 }
 
 /// A recording whose run cannot be rebuilt.

@@ -16,11 +16,13 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use robot_model::time::{Duration, Instant};
-use transport::{Clock, Error, Link, Listener, PtyLink, TcpLink, TcpListenerLink};
+use transport::{Clock, Error, Link, Listener, MockClock, PtyLink, TcpLink, TcpListenerLink, Tracer};
 
 use crate::pacing::Owed;
+use crate::runner::Endpoint;
 use crate::scenario::LoadedScenario;
 use crate::twin::{Twin, WriteBudget};
+use crate::viz::TwinPublisher;
 
 /// Largest burst a UART may send at once, bytes (its FIFO).
 const FIFO: f64 = 64.0;
@@ -88,6 +90,10 @@ pub struct ServeArgs {
     /// Print the robot's pose this often, simulated seconds (0 = never).
     #[arg(long, default_value_t = 1.0)]
     pub status_every: f64,
+    /// Also serve the twin live over the Foxglove WebSocket protocol: true pose, sonar, room and
+    /// the boards' traffic (default address 127.0.0.1:8765).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::viz::DEFAULT_ADDR)]
+    pub foxglove: Option<SocketAddr>,
 }
 
 impl ServeArgs {
@@ -254,22 +260,56 @@ pub fn open_ports(ports: &Ports) -> Result<(BoardPort, BoardPort), Error> {
 
 /// Runs the twin in real time, paced by `clock`, until `stop` is set or the duration is over.
 /// `ready` is called once with the port descriptions (motor, sensor) when they are open;
-/// `status` every `status_every` of simulated time.
+/// `status` every `status_every` of simulated time. With a `publisher`, each step's state and
+/// the bytes through both ports go to it (the ports are traced on the sim clock).
+#[allow(clippy::too_many_arguments)]
 pub fn serve(
     loaded: &LoadedScenario,
     seed: Option<u64>,
     options: &ServeOptions,
     clock: &impl Clock,
     stop: &AtomicBool,
+    publisher: Option<&mut TwinPublisher>,
     ready: impl FnOnce(&str, &str),
+    status: impl FnMut(Instant, &Twin),
+) -> Result<(), Error> {
+    let (motor, sensor) = open_ports(&options.ports)?;
+    ready(&motor.describe(), &sensor.describe());
+    let Some(publisher) = publisher else {
+        return run_paced(loaded, seed, options, clock, stop, (motor, sensor), status, |_| {}, |_, _| {});
+    };
+    let sim_clock = MockClock::new();
+    let (motor, sensor) = (Tracer::new(motor, sim_clock.clone()), Tracer::new(sensor, sim_clock.clone()));
+    let handles = [("motor", motor.handle()), ("sensor", sensor.handle())];
+    let mut records = Vec::new();
+    let after = |now: Instant, twin: &Twin| {
+        records.clear();
+        for (link, handle) in &handles {
+            let at = Endpoint { link, endpoint: "board", connection: None };
+            records.extend(handle.take().into_iter().map(|r| (at, r)));
+        }
+        publisher.after_step(now, twin, &records);
+    };
+    run_paced(loaded, seed, options, clock, stop, (motor, sensor), status, |now| sim_clock.set(now), after)
+}
+
+/// The paced loop of [`serve`]: `before` and `after` are called around each step.
+#[allow(clippy::too_many_arguments)]
+fn run_paced<M: Link, S: Link>(
+    loaded: &LoadedScenario,
+    seed: Option<u64>,
+    options: &ServeOptions,
+    clock: &impl Clock,
+    stop: &AtomicBool,
+    (mut motor, mut sensor): (M, S),
     mut status: impl FnMut(Instant, &Twin),
+    mut before: impl FnMut(Instant),
+    mut after: impl FnMut(Instant, &Twin),
 ) -> Result<(), Error> {
     let seed = seed.unwrap_or(loaded.scenario.seed);
     let dt = loaded.dt();
     let dt_s = dt.as_secs_f64();
     let mut twin = Twin::new(loaded, seed, dt);
-    let (mut motor, mut sensor) = open_ports(&options.ports)?;
-    ready(&motor.describe(), &sensor.describe());
     let mut motor_pacer = Pacer::new(loaded.profile.serial.motor_baud);
     let mut sensor_pacer = Pacer::new(loaded.profile.serial.sensor_baud);
     let mut now = Instant::ZERO;
@@ -289,11 +329,13 @@ pub fn serve(
         while done < owed.steps(dt_s) && !stop.load(Ordering::SeqCst) {
             now += dt;
             done += 1;
+            before(now);
             let budget = WriteBudget { motor: motor_pacer.tick(dt), sensor: sensor_pacer.tick(dt) };
             let io = twin.board_io(now, &mut motor, &mut sensor, budget);
             motor_pacer.spend(io.motor_sent);
             sensor_pacer.spend(io.sensor_sent);
             twin.physics_step(now);
+            after(now, &twin);
             if let Some(at) = next_status
                 && now >= at
             {

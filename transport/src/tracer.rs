@@ -86,6 +86,11 @@ impl TraceHandle {
         std::mem::take(&mut lock(&self.records).records)
     }
 
+    /// Calls `f` with the records waiting, oldest first, leaving them in place.
+    pub fn peek<R>(&self, f: impl FnOnce(&[TraceRecord]) -> R) -> R {
+        f(&lock(&self.records).records)
+    }
+
     /// How many records are waiting.
     pub fn len(&self) -> usize {
         lock(&self.records).records.len()
@@ -268,5 +273,17 @@ mod tests {
         assert_eq!(handle.len(), 1);
         assert_eq!(handle.take(), vec![rec(0, Direction::Written, b"1")]);
         assert!(handle.is_empty());
+    }
+
+    #[test]
+    fn peek_leaves_the_records_for_take() {
+        let clock = MockClock::new();
+        let (a, _b) = MemLink::pair(None, clock.clone());
+        let mut a = Tracer::new(a, clock);
+        let handle = a.handle();
+        a.write(b"hi").unwrap();
+        assert_eq!(handle.peek(|r| r.to_vec()), vec![rec(0, Direction::Written, b"hi")]);
+        assert_eq!(handle.take(), vec![rec(0, Direction::Written, b"hi")]);
+        assert_eq!(handle.peek(<[TraceRecord]>::len), 0);
     }
 }

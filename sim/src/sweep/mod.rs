@@ -38,6 +38,7 @@
 //! ```
 
 pub mod exec;
+pub mod mcap;
 pub mod merge;
 pub mod output;
 pub mod plan;
@@ -125,6 +126,10 @@ pub struct RunArgs {
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
+    /// Write an MCAP file of each run that does not pass to OUT/mcap/ (the run again, with a
+    /// recorder; see `explobot run --mcap`).
+    #[arg(long)]
+    pub mcap: bool,
 }
 
 impl SweepArgs {
@@ -188,6 +193,18 @@ impl RunArgs {
         let writing_s = writing.elapsed().as_secs_f64();
         let walls: Vec<Wall> = done.values().map(|f| f.wall).collect();
         eprintln!("{}", timing(&walls, workers, loading_s, writing_s, started.elapsed().as_secs_f64()));
+        if self.mcap {
+            let failed = mcap::failed(&plan, done.values());
+            let (files, notes) = mcap::write_all(&plan, &failed, &self.out, workers, self.timeout);
+            for note in &notes {
+                eprintln!("sweep: mcap: {note}");
+            }
+            println!(
+                "sweep: wrote {} MCAP file(s) of runs that did not pass to {}/mcap/",
+                files.len(),
+                self.out.display()
+            );
+        }
         Ok(verdict(&self.out, totals))
     }
 }

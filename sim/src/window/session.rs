@@ -154,7 +154,11 @@ pub(super) fn restart_when_asked(
         return;
     }
     match sim.0.restart() {
-        Ok(run) => {
+        Ok(mut run) => {
+            // A Foxglove/MCAP publisher follows the run into its restart.
+            if let Some(observer) = sim.0.take_observer() {
+                run.set_observer(observer);
+            }
             sim.0 = run;
             *handover = Handover::default();
             *ui = CuteUiState::default();
