@@ -72,7 +72,8 @@ pub(super) struct Safety {
     half_length_m: f64,
     half_width_m: f64,
     clearance_m: f64,
-    turn_radius_m: f64,
+    /// The swept circle of a turn plus the clearance: no known echo may lie inside it.
+    turn_clear_m: f64,
     safe_turns: bool,
 }
 
@@ -94,7 +95,7 @@ impl Safety {
             half_length_m: 0.5 * cfg.body_length_m,
             half_width_m: 0.5 * cfg.body_width_m,
             clearance_m: cfg.clearance_m,
-            turn_radius_m: cfg.turn_radius_m(),
+            turn_clear_m: cfg.turn_radius_m() + cfg.clearance_m,
             safe_turns: cfg.safe_turns,
         }
     }
@@ -255,7 +256,7 @@ impl Pilot {
         sensors: &SensorState,
         why: &str,
     ) {
-        let radius = self.safety.turn_radius_m + self.safety.clearance_m;
+        let radius = self.safety.turn_clear_m;
         let clear = self
             .believed(motor, sensors)
             .is_none_or(|r| self.surroundings.inside_circle(r, radius).is_none());
@@ -271,7 +272,7 @@ impl Pilot {
     /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
     pub(super) fn turn_safely(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
         let s = self.safety;
-        let radius = s.turn_radius_m + s.clearance_m;
+        let radius = s.turn_clear_m;
         let robot = match self.believed(motor, sensors) {
             Some(robot) if s.safe_turns => robot,
             _ => return self.start_turn(now, mv, motor, sensors),
