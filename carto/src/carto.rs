@@ -425,6 +425,11 @@ impl Carto {
         self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
     }
 
+    /// What the pilot is doing now, in words ([`Pilot::activity`]).
+    pub fn activity(&self) -> &'static str {
+        self.pilot.activity()
+    }
+
     /// A snapshot of the state.
     pub fn status(&self) -> CartoStatus {
         CartoStatus {

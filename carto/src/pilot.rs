@@ -232,6 +232,22 @@ impl Pilot {
         self.pose
     }
 
+    /// What the pilot is doing now, in words (for logs and diagnostics).
+    pub fn activity(&self) -> &'static str {
+        match self.stage {
+            Stage::Next if self.current.is_some() || !self.queue.is_empty() => "between commands",
+            Stage::Next => "idle",
+            Stage::Waiting { .. } => "waiting for fresh readings",
+            Stage::Checking { .. } => "checking the distance ahead",
+            Stage::Moving { kind: Move::Forward, .. } => "driving forward",
+            Stage::Moving { .. } => "turning",
+            Stage::BackingOff => "backing off after the bumper",
+            Stage::Looking { .. } => "turning to look (scan)",
+            Stage::Reading { .. } => "reading the sonar (scan)",
+            Stage::Shifting { .. } => "shifting before a turn",
+        }
+    }
+
     /// Whether a task runs or waits.
     pub fn is_busy(&self) -> bool {
         self.current.is_some() || !self.queue.is_empty()

@@ -119,6 +119,9 @@ pub struct CartoStats {
     pub searches: u64,
     /// Cells concluded unreachable.
     pub unreachable: usize,
+    /// Replies that showed the robot facing another way than believed (a turn Carto refused or
+    /// did not finish): the heading was taken from the reply.
+    pub heading_resyncs: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -399,6 +402,28 @@ impl Cartographer {
         self.plan.clear();
     }
 
+    /// A FORWARD's reply names the cell ahead of the robot as Carto knows it (the cell it moved
+    /// into, or the blocked one). When that neighbour is not the one ahead in the believed heading,
+    /// the robot faces another way — a turn Carto refused for safety (the link protocol has no
+    /// "not turned" answer) or did not finish — and the reply is the better evidence: the heading
+    /// follows it, so the next commands turn the robot the right way instead of repeating a
+    /// FORWARD that meets the same obstacle for ever.
+    fn follow_reply(&mut self, cell: (u8, u8)) {
+        match Heading::between(self.pose, cell) {
+            Some(faced) if faced != self.heading => {
+                warn!(
+                    believed = %self.heading,
+                    faced = %faced,
+                    "Carto's reply shows the robot facing another way (a turn not made); following it"
+                );
+                self.stats.heading_resyncs += 1;
+                self.heading = faced;
+                self.plan.clear();
+            }
+            _ => {}
+        }
+    }
+
     /// Feeds back what the last command did, updating the map and the robot's pose.
     pub fn on_result(&mut self, map: &mut Map, result: MoveResult) {
         let cmd = self.pending.take();
@@ -413,6 +438,7 @@ impl Cartographer {
                     self.plan.clear();
                     return;
                 }
+                self.follow_reply((x, y));
                 let (px, py) = (usize::from(self.pose.0), usize::from(self.pose.1));
                 if map.at(self.pose).is_some_and(|v| !v.is_known_free()) {
                     let _ = map.set_free(px, py);
@@ -427,6 +453,7 @@ impl Cartographer {
             }
             MoveResult::Blocked { x, y } => {
                 self.stats.bumps += 1;
+                self.follow_reply((x, y));
                 if (x, y) != self.pose {
                     // Outside the map it cannot be written, and needs not be: it is never planned.
                     let _ = map.set_obstacle(usize::from(x), usize::from(y));
@@ -484,5 +511,40 @@ mod tests {
         assert!(c.is_done());
         assert_eq!(c.unreachable_cells(), vec![(0, 0), (0, 2), (2, 0), (2, 2)]);
         assert_eq!(c.stats().searches, 1);
+    }
+    /// A turn Carto refused answers MOVE_DONE only, so Cute believes it turned. The FORWARD after
+    /// it is blocked at the cell ahead in Carto's heading: Cute follows that heading and turns,
+    /// instead of sending the same FORWARD into the same obstacle.
+    #[test]
+    fn a_blocked_reply_beside_the_believed_heading_resyncs_the_heading() {
+        let mut map = Map::new(3, 3).unwrap();
+        map.set_robot(1, 1).unwrap();
+        let mut c = Cartographer::new(3, 3, (1, 1), Heading::East).unwrap();
+        // Cute asks for a turn; Carto refuses it but answers MOVE_DONE, which Cute reads as Turned.
+        c.pending = Some(Move::Right);
+        c.on_result(&mut map, MoveResult::Turned);
+        assert_eq!(c.heading(), Heading::South);
+        // The robot still faces east: the FORWARD is blocked at (1, 2), east of (1, 1).
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Blocked { x: 1, y: 2 });
+        assert_eq!(c.heading(), Heading::East);
+        assert_eq!(c.stats().heading_resyncs, 1);
+        assert_eq!(map.at((1, 2)), Some(CellValue::Obstacle));
+        assert_eq!(map.at((2, 1)), Some(CellValue::Unknown), "the cell south was not touched");
+    }
+
+    #[test]
+    fn a_move_reply_sets_the_heading_to_the_direction_travelled() {
+        let mut map = Map::new(3, 3).unwrap();
+        map.set_robot(1, 2).unwrap();
+        let mut c = Cartographer::new(3, 3, (1, 2), Heading::North).unwrap();
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Moved { x: 1, y: 1 });
+        assert_eq!((c.pose(), c.heading()), ((1, 1), Heading::West));
+        assert_eq!(c.stats().heading_resyncs, 1);
+        // A reply that agrees changes nothing.
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Blocked { x: 1, y: 0 });
+        assert_eq!(c.stats().heading_resyncs, 1);
     }
 }

@@ -269,7 +269,11 @@ impl Lockstep {
 
         // 5. Physics.
         let trail_points = self.twin.trail().len();
+        let collisions = self.twin.body().world().collisions();
         self.twin.physics_step(now);
+        if self.twin.body().world().collisions() != collisions {
+            self.log_collision(now);
+        }
         if self.twin.trail().len() != trail_points {
             if let Some(point) = self
                 .carto
@@ -308,6 +312,35 @@ impl Lockstep {
             }
         }
         !self.is_finished()
+    }
+
+    /// A debug line for each new contact: when, where the robot really is, where Carto and Cute
+    /// believe it is, what Carto was doing, and what the truth says of the cell and of the move
+    /// ahead. It tells a localisation error from something the sonar never saw.
+    fn log_collision(&self, now: Instant) {
+        let p = self.twin.body().pose();
+        let cell = self.twin.cell();
+        let carto = self.carto.carto();
+        let believed = carto.believed_pose();
+        let carto_believes = believed.and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset));
+        // Whether the FORWARD Carto may be driving from its stored cell exists in the truth.
+        let move_ahead_exists = believed.and_then(|(pose, _)| {
+            let (r, c) = pose.ahead()?;
+            Some(self.truth.can_move((usize::from(pose.x), usize::from(pose.y)), (usize::from(r), usize::from(c))))
+        });
+        tracing::debug!(
+            t_s = now.as_secs_f64(),
+            x = p.x,
+            y = p.y,
+            heading_deg = p.theta.to_degrees(),
+            ?cell,
+            cell_turnable = ?cell.map(|(r, c)| self.truth.can_turn(r, c)),
+            ?carto_believes,
+            cute_believes = ?self.cute.cute().robot(),
+            carto = carto.activity(),
+            ?move_ahead_exists,
+            "collision: new contact"
+        );
     }
 
     /// Runs until the mission is over (plus a short settle) or the time limit.

@@ -12,8 +12,9 @@
 //! - A cell is **turnable** when the circle the body sweeps turning on the spot (radius: half
 //!   its diagonal) touches nothing.
 //!
-//! Touching means sharing any point (parry's exact intersection test): a footprint 0 mm from a
-//! wall does not fit. Documented answers to the awkward cases (each has a test below):
+//! Touching means coming within 1 mm (`world::TOUCH`, the gap at which a run counts a collision;
+//! parry's exact distance): a footprint 0.5 mm from a wall does not fit. Documented answers to
+//! the awkward cases (each has a test below):
 //! - a 4 cm table leg on a cell corner: the 0.26 × 0.24 m body at the centre of a 0.30 m cell
 //!   clears the corner by 1.5 cm, so the cell stays free, moves past the leg exist, and the robot
 //!   may even turn (its turning circle, 17.7 cm, ends 1.5 cm short of the leg);
@@ -44,6 +45,7 @@ use robot_model::grid::{GridFrame, reachable};
 use robot_model::profile::RobotProfile;
 
 use crate::grid::{PlacedShape, point_in_poly2d, room_edges, room_points};
+use crate::world::TOUCH;
 
 /// Which ways the robot fits standing at a cell's centre.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -94,16 +96,17 @@ impl<'a> Solids<'a> {
         }
     }
 
-    /// Whether `shape` at `pose` lies in the room and touches nothing. A pair parry cannot test
-    /// counts as touching (the safe side).
+    /// Whether `shape` at `pose` lies in the room and touches nothing: it stays more than
+    /// [`TOUCH`] away from every wall and obstacle, the gap at which the run's collision counter
+    /// starts counting a contact (so a turn the truth allows is never a counted collision when
+    /// made exactly at the centre). A pair parry cannot measure counts as touching (the safe side).
     fn clear(&self, pose: &Pose, shape: &dyn Shape) -> bool {
         if !point_in_poly2d(pose.translation, &self.room) {
             return false;
         }
-        let aabb = shape.compute_aabb(pose);
+        let aabb = shape.compute_aabb(pose).loosened(TOUCH);
         let apart = |p: &Pose, s: &dyn Shape, b: &Aabb| {
-            !aabb.intersects(b)
-                || query::intersection_test(pose, shape, p, s).is_ok_and(|hit| !hit.intersecting)
+            !aabb.intersects(b) || query::distance(pose, shape, p, s).is_ok_and(|d| d.distance > TOUCH)
         };
         self.walls.iter().all(|(w, b)| apart(&Pose::IDENTITY, w, b))
             && self.obstacles.iter().all(|(p, s, b)| apart(p, *s, b))
@@ -284,6 +287,22 @@ mod tests {
         assert!(t.can_move((0, 1), (0, 2)), "along the wall");
         assert!(!t.can_move((0, 1), (1, 1)), "across it, the body touches the wall at row 0");
         assert!(!t.reachable_from((1, 1))[1], "so row 0 cannot be entered from below");
+    }
+
+    /// The truth and the collision counter agree on what touching is: a turn at a cell's centre
+    /// that would pass within 1 mm of a wall is not allowed (found in a generated room where the
+    /// truth allowed a turn with 0.2 mm to spare and the run counted a collision).
+    #[test]
+    fn clearance_under_the_collision_gap_counts_as_touching() {
+        // Cell (1, 1) is centred at (0.45, 0.45); the turning circle has a radius of
+        // hypot(0.13, 0.12) = 0.1769 m. A thin wall at x = 0.45 + radius + gap.
+        let radius = 0.13f32.hypot(0.12);
+        let wall_at = |gap: f32| {
+            let x = 0.45 + radius + gap;
+            truth(&format!("Segment(from: ({x:?}, 0.0), to: ({x:?}, 0.9))"))
+        };
+        assert!(!wall_at(0.0005).can_turn(1, 1), "0.5 mm: the counter would count a contact");
+        assert!(wall_at(0.002).can_turn(1, 1), "2 mm: clear");
     }
 
     #[test]

@@ -27,7 +27,7 @@ use crate::scenario::{Obstacle, Scenario};
 /// Separation below which the robot starts touching something, metres. Rapier reports contact
 /// pairs from 2 cm apart (its prediction distance) and its manifold distances date from before
 /// the solver moved the bodies, so touching is decided from the true shape distance.
-const TOUCH: f32 = 0.001;
+pub(crate) const TOUCH: f32 = 0.001;
 /// Separation above which a touch has ended (hysteresis: sliding along a wall with the gap
 /// hovering around [`TOUCH`] is one collision, not many).
 const RELEASE: f32 = 0.005;
