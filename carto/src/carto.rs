@@ -425,8 +425,8 @@ impl Carto {
         self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
     }
 
-    /// What the pilot is doing now, in words ([`Pilot::activity`]).
-    pub fn activity(&self) -> &'static str {
+    /// What the pilot is doing now ([`Pilot::activity`]).
+    pub fn activity(&self) -> crate::pilot::Activity {
         self.pilot.activity()
     }
 

@@ -183,6 +183,55 @@ enum Stage {
     Shifting { mv: Move },
 }
 
+/// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Activity {
+    /// Nothing to do.
+    Idle,
+    /// Between two commands of a task, or a task waits.
+    BetweenCommands,
+    /// Waiting for fresh encoder and IMU readings before a move.
+    WaitingForReadings,
+    /// Waiting for a distance reading at rest before a FORWARD.
+    CheckingAhead,
+    /// A FORWARD runs.
+    DrivingForward,
+    /// A turn runs.
+    Turning,
+    /// Driving back after the bumper.
+    BackingOff,
+    /// Turning to one look of the sonar scan, or back.
+    ScanLook,
+    /// Waiting for the reading of a look of the scan.
+    ScanReading,
+    /// Driving back or forth before a turn so the turning body clears known echoes.
+    ShiftingBeforeTurn,
+}
+
+impl Activity {
+    /// The motion in progress rotates the body on the spot (a turn or a scan look) or shifts it
+    /// before a turn.
+    pub fn is_turning(self) -> bool {
+        matches!(self, Activity::Turning | Activity::ScanLook | Activity::ShiftingBeforeTurn)
+    }
+
+    /// In words.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Activity::Idle => "idle",
+            Activity::BetweenCommands => "between commands",
+            Activity::WaitingForReadings => "waiting for fresh readings",
+            Activity::CheckingAhead => "checking the distance ahead",
+            Activity::DrivingForward => "driving forward",
+            Activity::Turning => "turning",
+            Activity::BackingOff => "backing off after the bumper",
+            Activity::ScanLook => "turning to look (scan)",
+            Activity::ScanReading => "reading the sonar (scan)",
+            Activity::ShiftingBeforeTurn => "shifting before a turn",
+        }
+    }
+}
+
 /// The link session's state machine (see the module docs).
 #[derive(Debug, Clone)]
 pub struct Pilot {
@@ -232,19 +281,19 @@ impl Pilot {
         self.pose
     }
 
-    /// What the pilot is doing now, in words (for logs and diagnostics).
-    pub fn activity(&self) -> &'static str {
+    /// What the pilot is doing now.
+    pub fn activity(&self) -> Activity {
         match self.stage {
-            Stage::Next if self.current.is_some() || !self.queue.is_empty() => "between commands",
-            Stage::Next => "idle",
-            Stage::Waiting { .. } => "waiting for fresh readings",
-            Stage::Checking { .. } => "checking the distance ahead",
-            Stage::Moving { kind: Move::Forward, .. } => "driving forward",
-            Stage::Moving { .. } => "turning",
-            Stage::BackingOff => "backing off after the bumper",
-            Stage::Looking { .. } => "turning to look (scan)",
-            Stage::Reading { .. } => "reading the sonar (scan)",
-            Stage::Shifting { .. } => "shifting before a turn",
+            Stage::Next if self.current.is_some() || !self.queue.is_empty() => Activity::BetweenCommands,
+            Stage::Next => Activity::Idle,
+            Stage::Waiting { .. } => Activity::WaitingForReadings,
+            Stage::Checking { .. } => Activity::CheckingAhead,
+            Stage::Moving { kind: Move::Forward, .. } => Activity::DrivingForward,
+            Stage::Moving { .. } => Activity::Turning,
+            Stage::BackingOff => Activity::BackingOff,
+            Stage::Looking { .. } => Activity::ScanLook,
+            Stage::Reading { .. } => Activity::ScanReading,
+            Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
         }
     }
 

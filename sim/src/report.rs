@@ -10,7 +10,8 @@
 
 use std::fmt::Write as _;
 
-use serde::Serialize;
+use carto::pilot::Activity;
+use serde::{Deserialize, Serialize};
 
 use crate::localisation::Localisation;
 use crate::scenario::Expectations;
@@ -101,6 +102,75 @@ impl MapScore {
     }
 }
 
+/// What the robot was doing at the run's first contact, and what the ground truth says of it.
+/// One contact is enough to fail a real-room run and usually costs the pose, so the first one is
+/// what a sweep counts to tell a blind spot of the sonar from a localisation error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FirstContact {
+    /// Sim time, seconds.
+    pub t_s: f64,
+    /// The grid cell the robot was really in.
+    pub cell: Option<(usize, usize)>,
+    /// What Carto's pilot was doing, in words ([`Activity::describe`]).
+    pub carto_activity: String,
+    /// The contact's class.
+    pub cause: ContactCause,
+}
+
+/// Classes of [`FirstContact`], from Carto's activity and the truth ([`crate::truth`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ContactCause {
+    /// A FORWARD from Carto's cell along a move the truth does not have: something in the body's
+    /// path that the sonar did not report (beside its cone, or a surface at a glancing angle).
+    ForwardBlockedMove,
+    /// A FORWARD along a move the truth has: the robot was off its path (localisation).
+    ForwardOffPath,
+    /// A turn, a scan look or a shift in a cell where the truth allows no turn on the spot.
+    TurnWhereNoTurn,
+    /// A turn where the truth allows one: the robot was off the cell's centre.
+    TurnOffCentre,
+    /// Driving back after the bumper.
+    BackingOff,
+    /// Anything else (between commands, idle).
+    Other,
+}
+
+impl ContactCause {
+    /// Classifies a contact from Carto's `activity`, whether the truth has the move ahead of
+    /// Carto's stored pose, and whether the truth allows a turn in the robot's cell.
+    pub fn classify(
+        activity: Activity,
+        move_ahead_exists: Option<bool>,
+        cell_turnable: Option<bool>,
+    ) -> ContactCause {
+        match activity {
+            Activity::DrivingForward if move_ahead_exists == Some(true) => ContactCause::ForwardOffPath,
+            Activity::DrivingForward => ContactCause::ForwardBlockedMove,
+            a if a.is_turning() && cell_turnable == Some(true) => ContactCause::TurnOffCentre,
+            a if a.is_turning() => ContactCause::TurnWhereNoTurn,
+            Activity::BackingOff => ContactCause::BackingOff,
+            _ => ContactCause::Other,
+        }
+    }
+
+    /// One line for people.
+    pub fn describe(self) -> &'static str {
+        match self {
+            ContactCause::ForwardBlockedMove => {
+                "FORWARD along a move the truth blocks (the sonar did not report it)"
+            }
+            ContactCause::ForwardOffPath => "FORWARD along a move the truth has (off the path: localisation)",
+            ContactCause::TurnWhereNoTurn => "turn in a cell where the truth allows no turn",
+            ContactCause::TurnOffCentre => {
+                "turn in a cell where the truth allows one (off the centre: localisation)"
+            }
+            ContactCause::BackingOff => "backing off after the bumper",
+            ContactCause::Other => "other",
+        }
+    }
+}
+
 /// Everything a run reports; also written as `report.json`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
@@ -134,6 +204,8 @@ pub struct Report {
     pub moves: u64,
     /// Collisions counted by the physics.
     pub collisions: u32,
+    /// The first contact, if there was one.
+    pub first_contact: Option<FirstContact>,
     /// The robot's final pose: x, y (m), heading (deg, CCW from +x).
     pub final_pose: (f64, f64, f64),
     /// The grid cell the robot ends in.
@@ -295,6 +367,16 @@ impl Report {
             self.localisation.heading_error_at_s
         );
         let _ = writeln!(s, "collisions      {}", self.collisions);
+        if let Some(c) = &self.first_contact {
+            let cell = c.cell.map_or("off grid".to_string(), |(r, col)| format!("cell ({r}, {col})"));
+            let _ = writeln!(
+                s,
+                "first contact   {:.1} s, {cell}, {}: {}",
+                c.t_s,
+                c.carto_activity,
+                c.cause.describe()
+            );
+        }
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");
         for l in &self.links {
             let _ = writeln!(

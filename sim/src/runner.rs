@@ -28,6 +28,7 @@ use crate::grid::GridFrame;
 use crate::localisation::{Localisation, carto_belief};
 use crate::mission::Operator;
 use crate::record::EndpointLog;
+use crate::report::{ContactCause, FirstContact};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario};
 use crate::truth::RobotTruth;
 use crate::twin::{Twin, WriteBudget};
@@ -122,6 +123,8 @@ pub struct Lockstep {
     faults: Vec<Fault>,
     faults_fired: Vec<bool>,
     truth: RobotTruth,
+    /// The run's first contact with a wall or an obstacle.
+    first_contact: Option<FirstContact>,
     traces: Vec<(String, String, TraceHandle)>,
     logs: Vec<EndpointLog>,
     /// The link-log hash, computed once the run is over (the logs no longer change then).
@@ -208,6 +211,7 @@ impl Lockstep {
             faults_fired: vec![false; faults.len()],
             faults,
             truth,
+            first_contact: None,
             clock,
             traces,
             logs: Vec::new(),
@@ -272,7 +276,7 @@ impl Lockstep {
         let collisions = self.twin.body().world().collisions();
         self.twin.physics_step(now);
         if self.twin.body().world().collisions() != collisions {
-            self.log_collision(now);
+            self.note_contact(now);
         }
         if self.twin.trail().len() != trail_points {
             if let Some(point) = self
@@ -314,33 +318,47 @@ impl Lockstep {
         !self.is_finished()
     }
 
-    /// A debug line for each new contact: when, where the robot really is, where Carto and Cute
-    /// believe it is, what Carto was doing, and what the truth says of the cell and of the move
-    /// ahead. It tells a localisation error from something the sonar never saw.
-    fn log_collision(&self, now: Instant) {
+    /// Notes a new contact: the report's [`FirstContact`], and a debug line for each one with
+    /// when, where the robot really is, where Carto and Cute believe it is, what Carto was doing
+    /// and what the truth says of the cell and of the move ahead (`RUST_LOG=sim::runner=debug`).
+    fn note_contact(&mut self, now: Instant) {
         let p = self.twin.body().pose();
         let cell = self.twin.cell();
         let carto = self.carto.carto();
+        let activity = carto.activity();
         let believed = carto.believed_pose();
-        let carto_believes = believed.and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset));
+        let carto_believes =
+            believed.and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset));
         // Whether the FORWARD Carto may be driving from its stored cell exists in the truth.
         let move_ahead_exists = believed.and_then(|(pose, _)| {
             let (r, c) = pose.ahead()?;
-            Some(self.truth.can_move((usize::from(pose.x), usize::from(pose.y)), (usize::from(r), usize::from(c))))
+            Some(
+                self.truth
+                    .can_move((usize::from(pose.x), usize::from(pose.y)), (usize::from(r), usize::from(c))),
+            )
         });
+        let cell_turnable = cell.map(|(r, c)| self.truth.can_turn(r, c));
         tracing::debug!(
             t_s = now.as_secs_f64(),
             x = p.x,
             y = p.y,
             heading_deg = p.theta.to_degrees(),
             ?cell,
-            cell_turnable = ?cell.map(|(r, c)| self.truth.can_turn(r, c)),
+            ?cell_turnable,
             ?carto_believes,
             cute_believes = ?self.cute.cute().robot(),
-            carto = carto.activity(),
+            carto = activity.describe(),
             ?move_ahead_exists,
             "collision: new contact"
         );
+        if self.first_contact.is_none() {
+            self.first_contact = Some(FirstContact {
+                t_s: now.as_secs_f64(),
+                cell,
+                carto_activity: activity.describe().to_string(),
+                cause: ContactCause::classify(activity, move_ahead_exists, cell_turnable),
+            });
+        }
     }
 
     /// Runs until the mission is over (plus a short settle) or the time limit.

@@ -13,6 +13,7 @@ use serde::Deserialize;
 use super::SweepError;
 use super::exec::Verdict;
 use super::plan::{Manifest, group_of, rerun_command};
+use crate::report::{ContactCause, FirstContact};
 
 /// Most runs listed by name in `summary.md`'s failure tables.
 const MAX_LISTED: usize = 50;
@@ -45,6 +46,9 @@ pub struct RunRecord {
     /// Each expectation's verdict.
     #[serde(default)]
     pub checks: Vec<CheckRecord>,
+    /// The run's first contact, if any.
+    #[serde(default)]
+    pub first_contact: Option<FirstContact>,
 }
 
 /// One expectation of a run, as `report.json` has it.
@@ -199,6 +203,7 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
             failing.join(", ")
         );
     }
+    first_contacts(&mut s, records);
     let mut worst: Vec<&RunRecord> = records.iter().filter(|r| !r.verdict.passed()).collect();
     worst.sort_by(|a, b| {
         (a.verdict, std::cmp::Reverse(a.failed_checks()))
@@ -244,6 +249,49 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
     }
     let _ = writeln!(s, "```");
     s
+}
+
+/// The "First contacts" table: how many runs met something first while doing what (see
+/// [`ContactCause`]), and which. Nothing when no run touched anything.
+fn first_contacts(s: &mut String, records: &[RunRecord]) {
+    let mut by_cause: BTreeMap<ContactCause, Vec<&RunRecord>> = BTreeMap::new();
+    for r in records {
+        if let Some(c) = &r.first_contact {
+            by_cause.entry(c.cause).or_default().push(r);
+        }
+    }
+    if by_cause.is_empty() {
+        return;
+    }
+    let touched: usize = by_cause.values().map(Vec::len).sum();
+    let _ = writeln!(s, "\n## First contacts\n");
+    let _ = writeln!(
+        s,
+        "{touched} of {} runs touched something. What the robot was doing the first time, and what the \
+         ground truth says of it:\n",
+        records.len()
+    );
+    let _ = writeln!(s, "| first contact | runs | which |");
+    let _ = writeln!(s, "|---|---:|---|");
+    for (cause, runs) in &by_cause {
+        let mut which: Vec<String> = runs
+            .iter()
+            .take(MAX_LISTED)
+            .map(|r| format!("{} {}", short_room(&r.room), r.room_label()))
+            .collect();
+        if runs.len() > MAX_LISTED {
+            which.push(format!("…and {} more", runs.len() - MAX_LISTED));
+        }
+        let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which.join(", ")));
+    }
+}
+
+/// A room id without the file's folders or the generator's seed (the label has it).
+fn short_room(room: &str) -> String {
+    match room.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+        Some((style, _)) => style.to_string(),
+        None => Path::new(room).file_stem().map_or(room.to_string(), |f| f.to_string_lossy().into_owned()),
+    }
 }
 
 fn xml(text: &str) -> String {
@@ -354,6 +402,44 @@ mod tests {
             without_wall(r#"{"index":0,"reason":"x","wall":{"total_s":1.0}}"#),
             r#"{"index":0,"reason":"x""#
         );
+    }
+
+    #[test]
+    fn first_contacts_are_counted_by_cause_and_name_their_runs() {
+        let line = |i: usize, room: &str, cause: Option<&str>| {
+            let contact = cause.map_or("null".to_string(), |c| {
+                format!(r#"{{"t_s":1.0,"cell":[0,1],"carto_activity":"driving forward","cause":"{c}"}}"#)
+            });
+            RunRecord::parse(
+                &format!(r#"{{"index":{i},"room":"{room}","scenario":"s","seed":{i},"verdict":"fail","first_contact":{contact}}}"#),
+                "t",
+            )
+            .unwrap()
+        };
+        let records = [
+            line(0, "gen:flat:3", Some("forward-blocked-move")),
+            line(1, "scenarios/furnished.ron", Some("forward-blocked-move")),
+            line(2, "gen:office:1", Some("turn-where-no-turn")),
+            line(3, "gen:office:2", None),
+        ];
+        let mut s = String::new();
+        first_contacts(&mut s, &records);
+        assert!(s.contains("3 of 4 runs touched something"), "{s}");
+        assert!(
+            s.contains(&format!(
+                "| {} | 2 | flat room 3 seed 0, furnished seed 1 |",
+                ContactCause::ForwardBlockedMove.describe()
+            )),
+            "{s}"
+        );
+        assert!(s.contains(&format!(
+            "| {} | 1 | office room 1 seed 2 |",
+            ContactCause::TurnWhereNoTurn.describe()
+        )));
+        // An older results.jsonl line without the field still reads; no contact, no table.
+        let mut none = String::new();
+        first_contacts(&mut none, &[line(0, "gen:flat:3", None)]);
+        assert!(none.is_empty());
     }
 
     #[test]

@@ -1,0 +1,66 @@
+//! The report's first contact: what Carto was doing when the robot first touched something, and
+//! what the ground truth says of it (issue 10's diagnosis of real-room failures).
+
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
+
+use sim::report::ContactCause;
+use sim::runner::Lockstep;
+use sim::scenario::LoadedScenario;
+
+/// One row of three 0.45 m cells. A door jamb (a thin wall end) stands on the line between
+/// columns 1 and 2 and reaches 14 cm up from the bottom wall: 3.5 cm into the body's path (the
+/// path's centre line is at 22.5 cm, the body 12 cm either side of it), and outside the sonar's
+/// 15° cone from columns 0 and 1 (which reaches at most 7.2 cm off the centre line at the jamb).
+/// Cell (0, 2) is free (the footprint at its centre clears the jamb); the move (0, 1) → (0, 2)
+/// is not.
+const JAMB_ROOM: &str = r#"Scenario(
+    name: "jamb",
+    cell: Some(0.45),
+    room: [(0.0, 0.0), (1.35, 0.0), (1.35, 0.45), (0.0, 0.45)],
+    obstacles: [Segment(from: (0.9, 0.0), to: (0.9, 0.14))],
+    start: (row: 0, col: 0, heading: East),
+    physics: (max_sim_s: 60.0),
+    mission: [StartCartography, WaitUntilMapped],
+)"#;
+
+#[test]
+fn a_forward_into_a_door_jamb_the_sonar_cannot_see_is_classified_as_such() {
+    let loaded = LoadedScenario::from_ron_str(JAMB_ROOM, "jamb.ron", std::path::Path::new(".")).unwrap();
+    let truth = loaded.truth();
+    assert!(truth.is_free(0, 1) && truth.is_free(0, 2) && truth.can_turn(0, 1));
+    assert!(!truth.can_move((0, 1), (0, 2)));
+    let mut run = Lockstep::new(loaded, None).unwrap();
+    run.run_to_end(|_| {});
+    let report = run.report(1.0);
+    assert!(report.collisions >= 1, "{report:?}");
+    let first = report.first_contact.clone().expect("the robot touches the jamb");
+    assert_eq!(first.cause, ContactCause::ForwardBlockedMove, "{first:?}");
+    assert_eq!(first.carto_activity, "driving forward");
+    assert!(matches!(first.cell, Some((0, 1 | 2))), "{first:?}");
+    assert!(report.to_text().contains("first contact"), "{}", report.to_text());
+}
+
+#[test]
+fn a_run_that_touches_nothing_has_no_first_contact() {
+    let text = JAMB_ROOM.replace("obstacles: [Segment(from: (0.9, 0.0), to: (0.9, 0.14))]", "obstacles: []");
+    let loaded = LoadedScenario::from_ron_str(&text, "open.ron", std::path::Path::new(".")).unwrap();
+    let mut run = Lockstep::new(loaded, None).unwrap();
+    run.run_to_end(|_| {});
+    let report = run.report(1.0);
+    assert_eq!((report.collisions, report.first_contact.clone()), (0, None), "{report:?}");
+    assert!(!report.to_text().contains("first contact"));
+}
+
+#[test]
+fn the_classes_follow_carto_s_activity_and_the_truth() {
+    use carto::pilot::Activity;
+    let c = ContactCause::classify;
+    assert_eq!(c(Activity::DrivingForward, Some(false), Some(true)), ContactCause::ForwardBlockedMove);
+    assert_eq!(c(Activity::DrivingForward, None, None), ContactCause::ForwardBlockedMove);
+    assert_eq!(c(Activity::DrivingForward, Some(true), Some(false)), ContactCause::ForwardOffPath);
+    assert_eq!(c(Activity::Turning, Some(true), Some(false)), ContactCause::TurnWhereNoTurn);
+    assert_eq!(c(Activity::ScanLook, None, Some(true)), ContactCause::TurnOffCentre);
+    assert_eq!(c(Activity::ShiftingBeforeTurn, None, None), ContactCause::TurnWhereNoTurn);
+    assert_eq!(c(Activity::BackingOff, Some(true), Some(true)), ContactCause::BackingOff);
+    assert_eq!(c(Activity::Idle, Some(true), Some(true)), ContactCause::Other);
+}
