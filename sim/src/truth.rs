@@ -41,7 +41,7 @@ use rapier2d::parry::bounding_volume::{Aabb, BoundingVolume};
 use rapier2d::parry::math::{Pose, Vector};
 use rapier2d::parry::query;
 use rapier2d::parry::shape::{Ball, Cuboid, Segment, Shape};
-use robot_model::grid::{GridFrame, reachable};
+use robot_model::grid::{GridFrame, Heading, reachable};
 use robot_model::profile::RobotProfile;
 
 use crate::grid::{PlacedShape, point_in_poly2d, room_edges, room_points};
@@ -195,6 +195,109 @@ impl RobotTruth {
         }
     }
 
+    /// What a robot limited to the link protocol's moves — FORWARD one cell, turn on the spot;
+    /// no reverse, no sideways step — can visit without touching anything, starting at `start`
+    /// facing `heading`: it turns only where [`RobotTruth::can_turn`] allows and drives only along
+    /// moves that exist. See [`Visits`].
+    pub fn visits_from(&self, start: (usize, usize), heading: Heading) -> Visits {
+        self.visits_with(start, heading, |r, c| self.can_turn(r, c))
+    }
+
+    /// [`RobotTruth::visits_from`] with another rule for where the robot can turn, such as
+    /// [`turnable_after_slide`].
+    pub fn visits_with(
+        &self,
+        start: (usize, usize),
+        heading: Heading,
+        can_turn: impl Fn(usize, usize) -> bool,
+    ) -> Visits {
+        let (rows, cols) = (self.rows, self.cols);
+        let cells = rows * cols;
+        let mut visitable = vec![false; cells];
+        let mut round_trip = vec![false; cells];
+        let Some(start_cell) = self.index(start.0, start.1).filter(|_| self.is_free(start.0, start.1)) else {
+            return Visits { visitable, round_trip, tour_bound: 0 };
+        };
+        let state = |cell: usize, h: Heading| cell * 4 + heading_index(h);
+        // The states one step after (cell, h).
+        let next = |cell: usize, h: Heading| {
+            let (row, col) = (cell / cols, cell % cols);
+            let mut out = Vec::with_capacity(3);
+            if can_turn(row, col) {
+                out.push(state(cell, h.left()));
+                out.push(state(cell, h.right()));
+            }
+            let (dr, dc) = h.delta();
+            if let (Some(r), Some(c)) =
+                (row.checked_add_signed(dr as isize), col.checked_add_signed(dc as isize))
+                && r < rows
+                && c < cols
+                && self.can_move((row, col), (r, c))
+            {
+                out.push(state(r * cols + c, h));
+            }
+            out
+        };
+        let decode = |st: usize| (st / 4, Heading::ALL[st % 4]);
+        // Forward: every state reachable from the start state.
+        let mut seen = vec![false; cells * 4];
+        let mut stack = vec![state(start_cell, heading)];
+        seen[stack[0]] = true;
+        let mut edges_back: Vec<Vec<usize>> = vec![Vec::new(); cells * 4];
+        while let Some(st) = stack.pop() {
+            let (cell, h) = decode(st);
+            for n in next(cell, h) {
+                edges_back[n].push(st);
+                if !seen[n] {
+                    seen[n] = true;
+                    stack.push(n);
+                }
+            }
+        }
+        // Backward from the start state, over the edges met: the states that can return.
+        let mut back = vec![false; cells * 4];
+        let mut stack = vec![state(start_cell, heading)];
+        back[stack[0]] = true;
+        while let Some(st) = stack.pop() {
+            for &p in &edges_back[st] {
+                if !back[p] {
+                    back[p] = true;
+                    stack.push(p);
+                }
+            }
+        }
+        for st in 0..cells * 4 {
+            visitable[st / 4] |= seen[st];
+            round_trip[st / 4] |= seen[st] && back[st];
+        }
+        // A tour leaves the round trips at most once, into one branch: bound what it adds by
+        // the cells visitable from each state just outside them.
+        let mut branch_max = 0;
+        let mut mark = vec![false; cells * 4];
+        for st in (0..cells * 4).filter(|&st| seen[st] && back[st]) {
+            let (cell, h) = decode(st);
+            for first in next(cell, h).into_iter().filter(|&n| !back[n]) {
+                mark.fill(false);
+                let mut new_cells = vec![false; cells];
+                let mut stack = vec![first];
+                mark[first] = true;
+                while let Some(b) = stack.pop() {
+                    new_cells[b / 4] = !round_trip[b / 4];
+                    let (c, bh) = decode(b);
+                    for n in next(c, bh) {
+                        if !mark[n] {
+                            mark[n] = true;
+                            stack.push(n);
+                        }
+                    }
+                }
+                branch_max = branch_max.max(new_cells.iter().filter(|&&x| x).count());
+            }
+        }
+        let tour_bound = round_trip.iter().filter(|&&x| x).count() + branch_max;
+        Visits { visitable, round_trip, tour_bound }
+    }
+
     /// For every cell, whether moves connect it to `start`; row-major.
     pub fn reachable_from(&self, start: (usize, usize)) -> Vec<bool> {
         reachable(
@@ -205,6 +308,77 @@ impl RobotTruth {
             |a, b| self.can_move(a, b),
         )
     }
+}
+
+/// The cells a FORWARD-and-turn robot can visit without a touch ([`RobotTruth::visits_from`]),
+/// row-major. Coverage counts the cells moves connect to the start ([`RobotTruth::reachable_from`]);
+/// some of those can only be entered or left through a turn the body cannot make there (a dead
+/// end too narrow to turn in, a corridor entered through a cell beside a wall), so no robot on
+/// this link can map them without touching something.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Visits {
+    /// The robot can get there.
+    pub visitable: Vec<bool>,
+    /// The robot can get there and back to the start (in the start's heading), so a tour can go
+    /// on afterwards. A cell that is visitable but not `round_trip` is a one-way branch: at most
+    /// one such branch can be in a tour, at its end.
+    pub round_trip: Vec<bool>,
+    /// At most this many cells can be visited in one tour without a touch: the round trips plus
+    /// the largest one-way branch (an upper bound: a branch's cells are counted as if one walk
+    /// could visit them all).
+    pub tour_bound: usize,
+}
+
+/// For each cell (row-major), whether the robot could turn on the spot there after sliding from
+/// the centre to some point of the cell (mecanum wheels move any way without turning) and back:
+/// the turning circle at that point touches nothing, and the body, standing either way, touches
+/// nothing along the straight slide. A relaxation of [`RobotTruth::can_turn`], which turns at the
+/// centre only: Carto shifts before a turn, so bounds on what any Carto can do use this one.
+/// Sampled every 1.5 cm across the cell and every 1 cm along the slide.
+pub fn turnable_after_slide(
+    frame: GridFrame,
+    room: &[(f32, f32)],
+    obstacles: &[PlacedShape],
+    profile: &RobotProfile,
+) -> Vec<bool> {
+    const STEP_M: f32 = 0.015;
+    const SLIDE_STEP_M: f32 = 0.01;
+    let solids = Solids::new(room, obstacles);
+    let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
+    let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
+    let circle = Ball::new(half_l.hypot(half_w));
+    let at = |x: f32, y: f32| Pose::from_translation(Vector::new(x, y));
+    let reach = (frame.cell * 0.5 / STEP_M).floor() as i32;
+    let mut offsets: Vec<(f32, f32)> = (-reach..=reach)
+        .flat_map(|i| (-reach..=reach).map(move |j| (i as f32 * STEP_M, j as f32 * STEP_M)))
+        .collect();
+    offsets.sort_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)));
+    let mut out = Vec::with_capacity(frame.rows * frame.cols);
+    for row in 0..frame.rows {
+        for col in 0..frame.cols {
+            let (x, y) = frame.cell_center(row, col);
+            let both_ways = bodies.iter().all(|b| solids.clear(&at(x, y), b));
+            let slide_clear = |dx: f32, dy: f32| {
+                let steps = (dx.hypot(dy) / SLIDE_STEP_M).ceil().max(1.0) as usize;
+                (0..=steps).all(|k| {
+                    let t = k as f32 / steps as f32;
+                    bodies.iter().all(|b| solids.clear(&at(x + dx * t, y + dy * t), b))
+                })
+            };
+            out.push(
+                both_ways
+                    && offsets
+                        .iter()
+                        .any(|&(dx, dy)| solids.clear(&at(x + dx, y + dy), &circle) && slide_clear(dx, dy)),
+            );
+        }
+    }
+    out
+}
+
+/// A heading's place in [`Heading::ALL`].
+fn heading_index(h: Heading) -> usize {
+    Heading::ALL.iter().position(|&x| x == h).unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -287,6 +461,61 @@ mod tests {
         assert!(t.can_move((0, 1), (0, 2)), "along the wall");
         assert!(!t.can_move((0, 1), (1, 1)), "across it, the body touches the wall at row 0");
         assert!(!t.reachable_from((1, 1))[1], "so row 0 cannot be entered from below");
+    }
+
+    #[test]
+    fn turning_at_centres_only_leaves_the_corners_unvisited_sliding_first_opens_them() {
+        // An empty 3 × 4-cell room of 0.30 m cells: the robot can turn only in the two inner
+        // cells (1, 1) and (1, 2); against a wall its corners would touch it.
+        let t = truth("");
+        let cells = |v: &[bool]| -> Vec<(usize, usize)> {
+            (0..12).filter(|&i| v[i]).map(|i| (i / 4, i % 4)).collect()
+        };
+        let v = t.visits_from((1, 1), Heading::East);
+        // From an inner cell the robot faces any way and drives one cell on; there it faces a
+        // wall and cannot turn. A corner needs a turn in a border cell: never visitable, though
+        // coverage counts it (moves connect it to the start).
+        assert_eq!(cells(&v.visitable), vec![(0, 1), (0, 2), (1, 0), (1, 1), (1, 2), (1, 3), (2, 1), (2, 2)]);
+        assert!(t.reachable_from((1, 1)).iter().all(|&x| x));
+        // Every border cell is a dead end: only the inner cells are round trips.
+        assert_eq!(cells(&v.round_trip), vec![(1, 1), (1, 2)]);
+        // Out of the inner cells, one drive into a border cell ends the tour: 3 of 12 cells.
+        assert_eq!(v.tour_bound, 3);
+        // Sliding helps: the room is 0.90 m wide, more than the 2 × 17.7 cm the turning circle
+        // needs, so in every cell the robot can slide a few cm away from the walls, turn and
+        // slide back, and every cell becomes a round trip.
+        let s = crate::scenario::Scenario::from_ron_str(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.9), (0.0, 0.9)], start: (row: 0, col: 0, heading: East))",
+            "t.ron",
+        )
+        .unwrap();
+        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
+        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
+        assert!(slide.iter().all(|&x| x));
+        let v = t.visits_with((1, 1), Heading::East, |r, c| slide[r * 4 + c]);
+        assert!(v.round_trip.iter().all(|&x| x) && v.tour_bound == 12);
+        // Facing north in a corner the robot can go nowhere.
+        let v = t.visits_from((0, 0), Heading::North);
+        assert_eq!(cells(&v.visitable), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn sliding_away_from_a_wall_inside_the_turning_circle_allows_the_turn() {
+        // 3 × 3 cells of 0.45 m; a thin wall 16 cm east of the centre of (1, 1): inside the
+        // 17.7 cm turning circle, outside the body (13 cm half-length).
+        let s = crate::scenario::Scenario::from_ron_str(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.35, 0.0), (1.35, 1.35), (0.0, 1.35)], \
+             start: (row: 1, col: 1, heading: East), obstacles: [Segment(from: (0.835, 0.0), to: (0.835, 1.35))])",
+            "t.ron",
+        )
+        .unwrap();
+        let p = RobotProfile { grid_cell_m: 0.45, ..RobotProfile::default() };
+        let t = s.truth(&p);
+        assert!(t.is_free(1, 1) && !t.can_turn(1, 1));
+        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
+        assert!(slide[4], "2 cm west of the centre the circle clears the wall");
+        let v = t.visits_with((1, 0), Heading::East, |r, c| slide[r * 3 + c]);
+        assert!(v.round_trip[4]);
     }
 
     /// The truth and the collision counter agree on what touching is: a turn at a cell's centre

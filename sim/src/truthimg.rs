@@ -68,6 +68,16 @@ pub struct TruthCounts {
     pub reachable_turnable: usize,
     /// Moves between two free neighbours that the body's sweep blocks.
     pub blocked_moves: usize,
+    /// Reachable cells a FORWARD-and-turn robot can visit without a touch, sliding within a
+    /// cell before it turns ([`crate::truth::turnable_after_slide`]).
+    pub visitable: usize,
+    /// Of those, the cells it can also come back from.
+    pub round_trip: usize,
+    /// At most this many can be visited in one touch-free tour ([`crate::truth::Visits`]):
+    /// the best coverage any Carto and Cute on this link can reach with 0 collisions.
+    pub tour_bound: usize,
+    /// The same bound for a robot that turns at cell centres only.
+    pub tour_bound_at_centres: usize,
 }
 
 impl TruthCounts {
@@ -85,7 +95,17 @@ impl TruthCounts {
                 }
             }
         }
+        let start_heading = loaded.scenario.start.heading;
+        let s = &loaded.scenario;
+        let slide =
+            crate::truth::turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &loaded.profile);
+        let visits = t.visits_with(start, start_heading, |r, c| slide[r * t.cols + c]);
+        let count = |v: &[bool]| v.iter().zip(&reachable).filter(|&(&a, &b)| a && b).count();
         TruthCounts {
+            visitable: count(&visits.visitable),
+            round_trip: count(&visits.round_trip),
+            tour_bound: visits.tour_bound,
+            tour_bound_at_centres: t.visits_from(start, start_heading).tour_bound,
             rows: t.rows,
             cols: t.cols,
             free: cells().filter(|&(r, c)| t.is_free(r, c)).count(),
@@ -196,6 +216,22 @@ impl TruthArgs {
         println!("  reachable, turn on the spot  {}", c.reachable_turnable);
         println!("  free but not reachable       {}", c.free - c.reachable);
         println!("  moves blocked between free   {}", c.blocked_moves);
+        let pct = |n: usize| 100.0 * n as f64 / c.reachable.max(1) as f64;
+        println!(
+            "  visitable without a touch    {}  (FORWARD and turns, sliding in a cell to turn)",
+            c.visitable
+        );
+        println!("  … and back again             {}", c.round_trip);
+        println!(
+            "  one touch-free tour, at most {}  ({:.1}% of reachable: the best coverage with 0 collisions)",
+            c.tour_bound,
+            pct(c.tour_bound)
+        );
+        println!(
+            "  … turning at centres only    {}  ({:.1}%)",
+            c.tour_bound_at_centres,
+            pct(c.tour_bound_at_centres)
+        );
         let path = self
             .out
             .clone()
