@@ -113,6 +113,12 @@ pub struct FirstContact {
     pub cell: Option<(usize, usize)>,
     /// What Carto's pilot was doing, in words ([`Activity::describe`]).
     pub carto_activity: String,
+    /// How far the robot's centre really was from its cell's centre, metres.
+    pub off_centre_m: f64,
+    /// How far Carto's belief (its cell plus its dead-reckoned offset) was from the robot's
+    /// centre, metres; `None` without a pose. During a FORWARD the belief lags the motion by
+    /// design, so this is the localisation error only for turns and other moves on the spot.
+    pub belief_error_m: Option<f64>,
     /// The contact's class.
     pub cause: ContactCause,
 }
@@ -128,11 +134,12 @@ pub enum ContactCause {
     ForwardOffPath,
     /// A turn, a scan look or a shift in a cell where the truth allows no turn on the spot.
     TurnWhereNoTurn,
-    /// A turn where the truth allows one: the robot was off the cell's centre.
+    /// A turn where the truth allows one at the centre: the robot was off it, by a localisation
+    /// error or by Carto's own shift before the turn (see [`FirstContact::belief_error_m`]).
     TurnOffCentre,
     /// Driving back after the bumper.
     BackingOff,
-    /// Anything else (between commands, idle).
+    /// Anything else (between commands, idle, a FORWARD without a stored pose).
     Other,
 }
 
@@ -145,8 +152,11 @@ impl ContactCause {
         cell_turnable: Option<bool>,
     ) -> ContactCause {
         match activity {
-            Activity::DrivingForward if move_ahead_exists == Some(true) => ContactCause::ForwardOffPath,
-            Activity::DrivingForward => ContactCause::ForwardBlockedMove,
+            Activity::DrivingForward => match move_ahead_exists {
+                Some(true) => ContactCause::ForwardOffPath,
+                Some(false) => ContactCause::ForwardBlockedMove,
+                None => ContactCause::Other,
+            },
             a if a.is_turning() && cell_turnable == Some(true) => ContactCause::TurnOffCentre,
             a if a.is_turning() => ContactCause::TurnWhereNoTurn,
             Activity::BackingOff => ContactCause::BackingOff,
@@ -163,7 +173,7 @@ impl ContactCause {
             ContactCause::ForwardOffPath => "FORWARD along a move the truth has (off the path: localisation)",
             ContactCause::TurnWhereNoTurn => "turn in a cell where the truth allows no turn",
             ContactCause::TurnOffCentre => {
-                "turn in a cell where the truth allows one (off the centre: localisation)"
+                "turn in a cell where the truth allows one at the centre (off it: localisation or Carto's shift)"
             }
             ContactCause::BackingOff => "backing off after the bumper",
             ContactCause::Other => "other",
@@ -369,12 +379,14 @@ impl Report {
         let _ = writeln!(s, "collisions      {}", self.collisions);
         if let Some(c) = &self.first_contact {
             let cell = c.cell.map_or("off grid".to_string(), |(r, col)| format!("cell ({r}, {col})"));
+            let belief = c.belief_error_m.map_or(String::new(), |e| format!(", Carto's belief {e:.3} m off"));
             let _ = writeln!(
                 s,
-                "first contact   {:.1} s, {cell}, {}: {}",
+                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief})",
                 c.t_s,
                 c.carto_activity,
-                c.cause.describe()
+                c.cause.describe(),
+                c.off_centre_m
             );
         }
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");

@@ -352,10 +352,16 @@ impl Lockstep {
             "collision: new contact"
         );
         if self.first_contact.is_none() {
+            let off_centre_m = cell.map_or(0.0, |(r, c)| {
+                let (cx, cy) = self.truth.frame.cell_center(r, c);
+                f64::from((p.x - cx).hypot(p.y - cy))
+            });
             self.first_contact = Some(FirstContact {
                 t_s: now.as_secs_f64(),
                 cell,
                 carto_activity: activity.describe().to_string(),
+                off_centre_m,
+                belief_error_m: carto_believes.map(|(bx, by)| f64::from((p.x - bx).hypot(p.y - by))),
                 cause: ContactCause::classify(activity, move_ahead_exists, cell_turnable),
             });
         }

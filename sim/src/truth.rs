@@ -274,9 +274,13 @@ impl RobotTruth {
         // the cells visitable from each state just outside them.
         let mut branch_max = 0;
         let mut mark = vec![false; cells * 4];
+        let mut searched = vec![false; cells * 4];
         for st in (0..cells * 4).filter(|&st| seen[st] && back[st]) {
             let (cell, h) = decode(st);
             for first in next(cell, h).into_iter().filter(|&n| !back[n]) {
+                if std::mem::replace(&mut searched[first], true) {
+                    continue; // another exit leads into the same state
+                }
                 mark.fill(false);
                 let mut new_cells = vec![false; cells];
                 let mut stack = vec![first];
@@ -390,6 +394,16 @@ mod tests {
         truth_in(1.2, 0.9, obstacles)
     }
 
+    /// A `w` × `h` m room with `obstacles`, on cells of `cell` metres.
+    fn truth_with_cell(w: f32, h: f32, cell: f32, obstacles: &str) -> RobotTruth {
+        let text = format!(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
+             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
+        );
+        let s = crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap();
+        s.truth(&RobotProfile { grid_cell_m: cell, ..RobotProfile::default() })
+    }
+
     /// A `w` × `h` m room with `obstacles`, on the 0.30 m cells the documented cases are about.
     fn truth_in(w: f32, h: f32, obstacles: &str) -> RobotTruth {
         let text = format!(
@@ -497,6 +511,38 @@ mod tests {
         // Facing north in a corner the robot can go nowhere.
         let v = t.visits_from((0, 0), Heading::North);
         assert_eq!(cells(&v.visitable), vec![(0, 0)]);
+    }
+
+    #[test]
+    fn no_slide_helps_in_a_corridor_narrower_than_the_turning_circle() {
+        // One row of 0.30 m cells in a 0.30 m corridor: the body fits either way (0.26 × 0.24 m),
+        // the 2 × 17.7 cm circle nowhere.
+        let s = crate::scenario::Scenario::from_ron_str(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.3), (0.0, 0.3)], start: (row: 0, col: 0, heading: East))",
+            "t.ron",
+        )
+        .unwrap();
+        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
+        let t = s.truth(&p);
+        assert!((0..4).all(|c| t.is_free(0, c)));
+        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
+        assert_eq!(slide, vec![false; 4]);
+        // Facing east from (0, 0) the robot drives to the end and stays there.
+        let v = t.visits_with((0, 0), Heading::East, |_, c| slide[c]);
+        assert!(v.visitable.iter().all(|&x| x));
+        assert_eq!((v.round_trip, v.tour_bound), (vec![true, false, false, false], 4));
+    }
+
+    #[test]
+    fn a_tour_takes_the_larger_of_two_one_way_branches() {
+        // A 1 × 7 corridor of 0.45 m cells; the robot turns only in the middle cell (0, 3)
+        // (the rule is given, not measured): west is a branch of 3 cells, east one of 3.
+        let t = truth_with_cell(3.15, 0.45, 0.45, "Segment(from: (2.25, 0.0), to: (2.25, 0.15))");
+        // the segment blocks the move (0, 4) -> (0, 5): the east branch keeps 1 cell.
+        assert!(!t.can_move((0, 4), (0, 5)));
+        let v = t.visits_with((0, 3), Heading::East, |_, c| c == 3);
+        assert_eq!(v.round_trip.iter().filter(|&&x| x).count(), 1);
+        assert_eq!(v.tour_bound, 1 + 3, "the middle cell plus the west branch, not both branches");
     }
 
     #[test]

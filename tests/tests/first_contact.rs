@@ -37,6 +37,9 @@ fn a_forward_into_a_door_jamb_the_sonar_cannot_see_is_classified_as_such() {
     assert_eq!(first.cause, ContactCause::ForwardBlockedMove, "{first:?}");
     assert_eq!(first.carto_activity, "driving forward");
     assert!(matches!(first.cell, Some((0, 1 | 2))), "{first:?}");
+    // Carto drove straight from the centre of (0, 1): the robot is on the row's centre line.
+    assert!(first.off_centre_m < 0.225, "{first:?}");
+    assert!(first.belief_error_m.is_some_and(|e| e < 0.45), "{first:?}");
     assert!(report.to_text().contains("first contact"), "{}", report.to_text());
 }
 
@@ -56,7 +59,11 @@ fn the_classes_follow_carto_s_activity_and_the_truth() {
     use carto::pilot::Activity;
     let c = ContactCause::classify;
     assert_eq!(c(Activity::DrivingForward, Some(false), Some(true)), ContactCause::ForwardBlockedMove);
-    assert_eq!(c(Activity::DrivingForward, None, None), ContactCause::ForwardBlockedMove);
+    assert_eq!(
+        c(Activity::DrivingForward, None, None),
+        ContactCause::Other,
+        "no pose: no stored move to judge"
+    );
     assert_eq!(c(Activity::DrivingForward, Some(true), Some(false)), ContactCause::ForwardOffPath);
     assert_eq!(c(Activity::Turning, Some(true), Some(false)), ContactCause::TurnWhereNoTurn);
     assert_eq!(c(Activity::ScanLook, None, Some(true)), ContactCause::TurnOffCentre);

@@ -408,7 +408,9 @@ mod tests {
     fn first_contacts_are_counted_by_cause_and_name_their_runs() {
         let line = |i: usize, room: &str, cause: Option<&str>| {
             let contact = cause.map_or("null".to_string(), |c| {
-                format!(r#"{{"t_s":1.0,"cell":[0,1],"carto_activity":"driving forward","cause":"{c}"}}"#)
+                format!(
+                    r#"{{"t_s":1.0,"cell":[0,1],"carto_activity":"driving forward","off_centre_m":0.1,"belief_error_m":null,"cause":"{c}"}}"#
+                )
             });
             RunRecord::parse(
                 &format!(r#"{{"index":{i},"room":"{room}","scenario":"s","seed":{i},"verdict":"fail","first_contact":{contact}}}"#),
