@@ -73,6 +73,10 @@ pub fn describe(event: &CuteEvent) -> String {
         ),
         CuteEvent::MoveTimeout { waiting_for } => format!("timeout waiting for {waiting_for:?}"),
         CuteEvent::MoveRejected { command } => format!("{command} refused"),
+        CuteEvent::TurnNotMade { faced } => format!(
+            "the robot faces {faced}: Carto did not make the last turn (it refuses a turn that would \
+             touch something it has seen); following the robot"
+        ),
         CuteEvent::Stopped => "stopped".to_string(),
         CuteEvent::ProtocolError { message, fatal } => {
             format!("protocol error{}: {message}", if *fatal { " (fatal)" } else { "" })
@@ -81,11 +85,15 @@ pub fn describe(event: &CuteEvent) -> String {
 }
 
 /// True for warnings the operator should keep seeing until the next action (the GUI puts them
-/// on its notice line): compat plans through unknown cells, dropped batches, the compat hint.
+/// on its notice line): compat plans through unknown cells, dropped batches, the compat hint, a
+/// turn Carto did not make.
 pub fn is_warning(event: &CuteEvent) -> bool {
     matches!(
         event,
-        CuteEvent::PlannedThroughUnknown { .. } | CuteEvent::BatchDropped { .. } | CuteEvent::CompatHint
+        CuteEvent::PlannedThroughUnknown { .. }
+            | CuteEvent::BatchDropped { .. }
+            | CuteEvent::CompatHint
+            | CuteEvent::TurnNotMade { .. }
     )
 }
 
@@ -111,5 +119,13 @@ mod tests {
         assert_eq!(popup_for(&dropped).map(|p| p.title), Some("Batch dropped".to_string()));
         assert_eq!(popup_for(&CuteEvent::CompatHint).map(|p| p.title), Some("Carto does not answer".into()));
         assert!(!is_warning(&CuteEvent::Connected));
+    }
+
+    #[test]
+    fn a_turn_carto_did_not_make_is_a_warning_with_its_likely_reason() {
+        let e = CuteEvent::TurnNotMade { faced: robot_model::grid::Heading::East };
+        let text = describe(&e);
+        assert!(text.starts_with("the robot faces EAST") && text.contains("refuses a turn"), "{text}");
+        assert!(is_warning(&e) && popup_for(&e).is_none());
     }
 }

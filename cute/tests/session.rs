@@ -25,6 +25,9 @@ struct ScriptedCarto {
     unsolicited_rpr: bool,
     /// Answer trajectories with positions and MOVE_DONE (our Carto) or silently (the original).
     silent_trajectories: bool,
+    /// Turns to refuse from now on (answered with MOVE_DONE only, heading unchanged), as our
+    /// Carto does with a turn whose swept body would touch an echo it knows.
+    refuse_turns: u32,
     /// Frames received, for assertions.
     seen: Vec<GuiMessage>,
     orders: Vec<MsgOrder>,
@@ -40,6 +43,7 @@ impl ScriptedCarto {
             batch: Vec::new(),
             unsolicited_rpr: false,
             silent_trajectories: false,
+            refuse_turns: 0,
             seen: Vec::new(),
             orders: Vec::new(),
         }
@@ -71,6 +75,10 @@ impl ScriptedCarto {
                         false
                     }
                 }
+            }
+            _ if self.refuse_turns > 0 => {
+                self.refuse_turns -= 1;
+                true
             }
             turn => {
                 self.pose = Some((cell, h.after(turn)));
@@ -244,6 +252,27 @@ fn cartography_over_bytes_maps_every_reachable_cell() {
     println!("session cartography: {moves} moves, {} frames in, {} out", c.frames_in, c.frames_out);
     // Every cartography frame was one move, answered before the next was sent.
     assert!(carto.seen.iter().skip(1).all(|m| matches!(m, GuiMessage::SendMoveCartography { .. })));
+}
+
+#[test]
+fn a_turn_carto_refuses_is_noticed_from_the_next_reply_and_mapping_still_ends_right() {
+    let mut cute = Cute::new(config((0, 0), Heading::East)).unwrap();
+    let mut carto = ScriptedCarto::new(ROOM);
+    carto.refuse_turns = 1;
+    let (mut now, mut ch) = (Instant::ZERO, Chunker(7));
+    cute.on_connected(now);
+    cute.start_cartography().unwrap();
+    exchange(&mut cute, &mut carto, &mut now, &mut ch);
+    assert_eq!(carto.refuse_turns, 0, "a turn was refused");
+    assert_eq!(cute.status(), Status::Done);
+    let world = World::parse(ROOM).unwrap();
+    for ((x, y), v) in cute.map().iter() {
+        assert_eq!(v.is_known_free(), !world.is_blocked(x.into(), y.into()), "cell ({x}, {y}) is {v:?}");
+    }
+    let (x, y, h) = cute.robot();
+    assert_eq!(((x, y), h), carto.true_pose(), "Cute follows the heading Carto's replies show");
+    let events = cute.take_events();
+    assert_eq!(events.iter().filter(|e| matches!(e, CuteEvent::TurnNotMade { .. })).count(), 1, "{events:?}");
 }
 
 fn mapped_session(world: &str, rows: usize, cols: usize) -> (Cute, ScriptedCarto, Instant, Chunker) {

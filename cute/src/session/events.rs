@@ -19,7 +19,7 @@
 //! assert_eq!(cute.counters().frames_out, 2); // SEND_ROBOT_POSITION, STOP_ROBOT
 //! ```
 
-use robot_model::grid::Move;
+use robot_model::grid::{Heading, Move};
 
 /// What the session is doing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -123,6 +123,13 @@ pub enum CuteEvent {
     MoveRejected {
         /// The refused command.
         command: Move,
+    },
+    /// A FORWARD's reply showed the robot facing `faced`, not the heading Cute believed: Carto
+    /// did not make a turn it was sent (it refuses a turn whose swept body would touch something
+    /// it has seen; the link protocol cannot say so). Cute now follows the robot's heading.
+    TurnNotMade {
+        /// The heading the reply shows.
+        faced: Heading,
     },
     /// The user pressed STOP.
     Stopped,

@@ -155,6 +155,14 @@ impl Mission {
         }
     }
 
+    /// Headings the cartographer took from Carto's replies so far (0 outside cartography).
+    pub(crate) fn heading_resyncs(&self) -> u64 {
+        match self {
+            Mission::Mapping(m) => m.carto.stats().heading_resyncs,
+            _ => 0,
+        }
+    }
+
     /// The deadline of the move or batch in flight.
     pub(crate) fn deadline(&self) -> Option<Instant> {
         match self {

@@ -540,8 +540,13 @@ impl Cute {
             }
             GuiMessage::MoveDone => {
                 self.counters.moves_done += 1;
+                let resyncs = self.mission.heading_resyncs();
                 match self.mission.on_move_done(&mut self.belief) {
-                    Answer::Applied => {}
+                    Answer::Applied => {
+                        if self.mission.heading_resyncs() > resyncs {
+                            self.events.push(CuteEvent::TurnNotMade { faced: self.belief.heading });
+                        }
+                    }
                     Answer::Rejected(command) => {
                         self.events.push(CuteEvent::MoveRejected { command });
                         self.end_mission(Status::Idle);
