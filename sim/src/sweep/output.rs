@@ -12,7 +12,7 @@ use serde::Deserialize;
 
 use super::SweepError;
 use super::exec::Verdict;
-use super::plan::{Manifest, group_of, rerun_command};
+use super::plan::{Manifest, generated_room, group_of, rerun_command};
 use crate::report::{ContactCause, FirstContact};
 
 /// Most runs listed by name in `summary.md`'s failure tables.
@@ -76,7 +76,7 @@ impl RunRecord {
     }
 
     fn room_label(&self) -> String {
-        match self.room.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+        match generated_room(&self.room) {
             Some((_, room_seed)) => format!("room {room_seed} seed {}", self.seed),
             None => format!("seed {}", self.seed),
         }
@@ -288,7 +288,7 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
 
 /// A room id without the file's folders or the generator's seed (the label has it).
 fn short_room(room: &str) -> String {
-    match room.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+    match generated_room(room) {
         Some((style, _)) => style.to_string(),
         None => Path::new(room).file_stem().map_or(room.to_string(), |f| f.to_string_lossy().into_owned()),
     }

@@ -213,9 +213,14 @@ impl Room {
     }
 }
 
+/// The style and room seed of a generated room's id (`gen:STYLE:SEED`); `None` for a file.
+pub fn generated_room(room_id: &str) -> Option<(&str, &str)> {
+    room_id.strip_prefix("gen:").and_then(|r| r.split_once(':'))
+}
+
 /// The summary group of a room id.
 pub fn group_of(room_id: &str) -> String {
-    match room_id.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+    match generated_room(room_id) {
         Some((style, _)) => format!("generated {style}"),
         None => room_id.to_string(),
     }
@@ -223,7 +228,7 @@ pub fn group_of(room_id: &str) -> String {
 
 /// The command that re-runs one run.
 pub fn rerun_command(room_id: &str, seed: u64) -> String {
-    match room_id.strip_prefix("gen:").and_then(|r| r.split_once(':')) {
+    match generated_room(room_id) {
         Some((style, room_seed)) => format!(
             "explobot generate --style {style} --seed {room_seed} --out {style}-{room_seed}.ron && \
              explobot run {style}-{room_seed}.ron --seed {seed}"
