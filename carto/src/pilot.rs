@@ -284,7 +284,7 @@ impl Pilot {
     /// What the pilot is doing now.
     pub fn activity(&self) -> Activity {
         match self.stage {
-            Stage::Next if self.current.is_some() || !self.queue.is_empty() => Activity::BetweenCommands,
+            Stage::Next if self.is_busy() => Activity::BetweenCommands,
             Stage::Next => Activity::Idle,
             Stage::Waiting { .. } => Activity::WaitingForReadings,
             Stage::Checking { .. } => Activity::CheckingAhead,

@@ -218,7 +218,8 @@ impl RobotTruth {
         let Some(start_cell) = self.index(start.0, start.1).filter(|_| self.is_free(start.0, start.1)) else {
             return Visits { visitable, round_trip, tour_bound: 0 };
         };
-        let state = |cell: usize, h: Heading| cell * 4 + heading_index(h);
+        // Heading::ALL lists the headings in wire order, so `as_u8` is the index.
+        let state = |cell: usize, h: Heading| cell * 4 + usize::from(h.as_u8());
         // The states one step after (cell, h).
         let next = |cell: usize, h: Heading| {
             let (row, col) = (cell / cols, cell % cols);
@@ -317,8 +318,9 @@ impl RobotTruth {
 /// The cells a FORWARD-and-turn robot can visit without a touch ([`RobotTruth::visits_from`]),
 /// row-major. Coverage counts the cells moves connect to the start ([`RobotTruth::reachable_from`]);
 /// some of those can only be entered or left through a turn the body cannot make there (a dead
-/// end too narrow to turn in, a corridor entered through a cell beside a wall), so no robot on
-/// this link can map them without touching something.
+/// end too narrow to turn in, a corridor entered through a cell beside a wall), so a robot that
+/// moves as this model does (FORWARD between cell centres, turns on the spot) cannot map them
+/// without touching something.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Visits {
     /// The robot can get there.
@@ -362,9 +364,10 @@ pub fn turnable_after_slide(
         for col in 0..frame.cols {
             let (x, y) = frame.cell_center(row, col);
             let both_ways = bodies.iter().all(|b| solids.clear(&at(x, y), b));
+            // The slide's first point is the centre, checked once above.
             let slide_clear = |dx: f32, dy: f32| {
                 let steps = (dx.hypot(dy) / SLIDE_STEP_M).ceil().max(1.0) as usize;
-                (0..=steps).all(|k| {
+                (1..=steps).all(|k| {
                     let t = k as f32 / steps as f32;
                     bodies.iter().all(|b| solids.clear(&at(x + dx * t, y + dy * t), b))
                 })
@@ -380,11 +383,6 @@ pub fn turnable_after_slide(
     out
 }
 
-/// A heading's place in [`Heading::ALL`].
-fn heading_index(h: Heading) -> usize {
-    Heading::ALL.iter().position(|&x| x == h).unwrap_or(0)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -394,30 +392,36 @@ mod tests {
         truth_in(1.2, 0.9, obstacles)
     }
 
-    /// A `w` × `h` m room with `obstacles`, on cells of `cell` metres.
-    fn truth_with_cell(w: f32, h: f32, cell: f32, obstacles: &str) -> RobotTruth {
+    /// A `w` × `h` m room with `obstacles`, the robot starting in cell (0, 0).
+    fn room(w: f32, h: f32, obstacles: &str) -> crate::scenario::Scenario {
         let text = format!(
             "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
              start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
         );
-        let s = crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap();
-        s.truth(&RobotProfile { grid_cell_m: cell, ..RobotProfile::default() })
+        crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap()
+    }
+
+    /// The default robot on cells of `cell` metres.
+    fn robot(cell: f32) -> RobotProfile {
+        RobotProfile { grid_cell_m: cell, ..RobotProfile::default() }
+    }
+
+    /// A `w` × `h` m room with `obstacles`, on cells of `cell` metres.
+    fn truth_with_cell(w: f32, h: f32, cell: f32, obstacles: &str) -> RobotTruth {
+        room(w, h, obstacles).truth(&robot(cell))
+    }
+
+    /// The truth of that room and, per cell, whether the robot can turn after a slide.
+    fn truth_and_slide(w: f32, h: f32, cell: f32, obstacles: &str) -> (RobotTruth, Vec<bool>) {
+        let (s, p) = (room(w, h, obstacles), robot(cell));
+        let t = s.truth(&p);
+        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
+        (t, slide)
     }
 
     /// A `w` × `h` m room with `obstacles`, on the 0.30 m cells the documented cases are about.
     fn truth_in(w: f32, h: f32, obstacles: &str) -> RobotTruth {
-        let text = format!(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
-             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
-        );
-        let s = crate::scenario::Scenario::from_ron_str(&text, "t.ron").unwrap();
-        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
-        RobotTruth::build(
-            crate::grid::room_frame(&s.room, s.cell_size(&p)),
-            &s.room,
-            &s.obstacle_shapes(),
-            &p,
-        )
+        truth_with_cell(w, h, 0.30, obstacles)
     }
 
     #[test]
@@ -498,13 +502,7 @@ mod tests {
         // Sliding helps: the room is 0.90 m wide, more than the 2 × 17.7 cm the turning circle
         // needs, so in every cell the robot can slide a few cm away from the walls, turn and
         // slide back, and every cell becomes a round trip.
-        let s = crate::scenario::Scenario::from_ron_str(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.9), (0.0, 0.9)], start: (row: 0, col: 0, heading: East))",
-            "t.ron",
-        )
-        .unwrap();
-        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
-        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
+        let (_, slide) = truth_and_slide(1.2, 0.9, 0.30, "");
         assert!(slide.iter().all(|&x| x));
         let v = t.visits_with((1, 1), Heading::East, |r, c| slide[r * 4 + c]);
         assert!(v.round_trip.iter().all(|&x| x) && v.tour_bound == 12);
@@ -517,15 +515,8 @@ mod tests {
     fn no_slide_helps_in_a_corridor_narrower_than_the_turning_circle() {
         // One row of 0.30 m cells in a 0.30 m corridor: the body fits either way (0.26 × 0.24 m),
         // the 2 × 17.7 cm circle nowhere.
-        let s = crate::scenario::Scenario::from_ron_str(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.2, 0.0), (1.2, 0.3), (0.0, 0.3)], start: (row: 0, col: 0, heading: East))",
-            "t.ron",
-        )
-        .unwrap();
-        let p = RobotProfile { grid_cell_m: 0.30, ..RobotProfile::default() };
-        let t = s.truth(&p);
+        let (t, slide) = truth_and_slide(1.2, 0.3, 0.30, "");
         assert!((0..4).all(|c| t.is_free(0, c)));
-        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
         assert_eq!(slide, vec![false; 4]);
         // Facing east from (0, 0) the robot drives to the end and stays there.
         let v = t.visits_with((0, 0), Heading::East, |_, c| slide[c]);
@@ -549,16 +540,8 @@ mod tests {
     fn sliding_away_from_a_wall_inside_the_turning_circle_allows_the_turn() {
         // 3 × 3 cells of 0.45 m; a thin wall 16 cm east of the centre of (1, 1): inside the
         // 17.7 cm turning circle, outside the body (13 cm half-length).
-        let s = crate::scenario::Scenario::from_ron_str(
-            "Scenario(name: \"t\", room: [(0.0, 0.0), (1.35, 0.0), (1.35, 1.35), (0.0, 1.35)], \
-             start: (row: 1, col: 1, heading: East), obstacles: [Segment(from: (0.835, 0.0), to: (0.835, 1.35))])",
-            "t.ron",
-        )
-        .unwrap();
-        let p = RobotProfile { grid_cell_m: 0.45, ..RobotProfile::default() };
-        let t = s.truth(&p);
+        let (t, slide) = truth_and_slide(1.35, 1.35, 0.45, "Segment(from: (0.835, 0.0), to: (0.835, 1.35))");
         assert!(t.is_free(1, 1) && !t.can_turn(1, 1));
-        let slide = turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &p);
         assert!(slide[4], "2 cm west of the centre the circle clears the wall");
         let v = t.visits_with((1, 0), Heading::East, |r, c| slide[r * 3 + c]);
         assert!(v.round_trip[4]);

@@ -74,7 +74,8 @@ pub struct TruthCounts {
     /// Of those, the cells it can also come back from.
     pub round_trip: usize,
     /// At most this many can be visited in one touch-free tour ([`crate::truth::Visits`]):
-    /// the best coverage any Carto and Cute on this link can reach with 0 collisions.
+    /// an upper bound on the coverage a run with 0 collisions can reach, in the truth's model of
+    /// motion (FORWARD between cell centres, turns after a straight slide).
     pub tour_bound: usize,
     /// The same bound for a robot that turns at cell centres only.
     pub tour_bound_at_centres: usize,
