@@ -18,7 +18,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use foxglove::messages::{Grid, PoseInFrame, SceneUpdate};
-use processes::{Guard, TempDir, binary, free_port, wait_for, workspace_root};
+use processes::{Guard, TempDir, binary, free_port, free_port_pair, wait_for, workspace_root};
 use prost::Message as _;
 use serde_json::{Value, json};
 use tungstenite::client::IntoClientRequest;
@@ -127,8 +127,14 @@ fn lines_of(child: &mut std::process::Child) -> Arc<Mutex<Vec<String>>> {
 #[test]
 fn issue_13_served_twin_streams_poses_to_a_websocket_client() {
     let dir = TempDir::new("explobot-fox-serve");
-    let port = free_port();
-    let boards = free_port();
+    // The twin listens on `boards` and `boards + 1`; the Foxglove server must not take either.
+    let boards = free_port_pair();
+    let port = loop {
+        let p = free_port();
+        if p != boards && p != boards + 1 {
+            break p;
+        }
+    };
     let mut child = Command::new(binary("explobot"))
         .args(["sim", "scenarios/empty.ron", "--serve", "--tcp", &boards.to_string(), "--status-every", "0"])
         .args(["--foxglove", &format!("127.0.0.1:{port}"), "--run-dir"])

@@ -64,6 +64,17 @@ pub fn free_port() -> u16 {
     TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
 }
 
+/// A free port whose next one is free too: a base for `explobot sim --serve --tcp BASE`, which
+/// listens on BASE (motor) and BASE + 1 (sensor).
+pub fn free_port_pair() -> u16 {
+    loop {
+        let p = free_port();
+        if p < u16::MAX && TcpListener::bind(("127.0.0.1", p + 1)).is_ok() {
+            return p;
+        }
+    }
+}
+
 /// Polls `f` every 5 ms until it gives a value; panics naming `what` after `limit`.
 pub fn wait_for<T>(what: &str, limit: Duration, mut f: impl FnMut() -> Option<T>) -> T {
     let deadline = Instant::now() + limit;
@@ -94,13 +105,7 @@ pub struct Twin {
 impl Twin {
     /// On two free ports.
     pub fn start(dir: &TempDir, status_every: f64) -> Twin {
-        let base = loop {
-            let p = free_port();
-            if p < u16::MAX && TcpListener::bind(("127.0.0.1", p + 1)).is_ok() {
-                break p;
-            }
-        };
-        Self::start_on(dir, base, status_every)
+        Self::start_on(dir, free_port_pair(), status_every)
     }
 
     /// On ports `base` (motor) and `base + 1` (sensor); returns once it serves.
