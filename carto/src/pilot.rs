@@ -506,10 +506,17 @@ impl Pilot {
                         self.fail(now, "a board is lost");
                         continue;
                     }
+                    // With a pose the odometry's offset is from the cell's centre, and the
+                    // FORWARD ends on the next one (a reconnect can leave the robot mid-move).
+                    let done_cm = if self.pose.is_some() {
+                        (motor.odometry().offset().along_m * 100.0) as f32
+                    } else {
+                        0.0
+                    };
                     let check = if sensors.bumper_pressed() {
                         Check::Obstacle { cm: 0.0 }
                     } else {
-                        us.check(now, self.rest_since)
+                        us.check_ahead(now, self.rest_since, done_cm)
                     };
                     match check {
                         Check::Pending if now.saturating_since(since) >= self.distance_wait => {

@@ -79,11 +79,20 @@ impl Ultrasound {
     /// The obstacle rule applied to the latest reading, if it arrived at or after `rest_since`
     /// and is at most the maximum age at `now`.
     pub fn check(&self, now: Instant, rest_since: Instant) -> Check {
+        self.check_ahead(now, rest_since, 0.0)
+    }
+
+    /// [`Ultrasound::check`] for a robot `done_cm` past its cell's centre along its heading (a
+    /// FORWARD cut short, or a shift before a turn; negative: behind the centre). The FORWARD
+    /// still ends on the next cell's centre, so the threshold shrinks by what is done: the rule
+    /// stays "the front face at the next centre would reach the echo".
+    pub fn check_ahead(&self, now: Instant, rest_since: Instant, done_cm: f32) -> Check {
+        let threshold_cm = self.threshold_cm - done_cm;
         match self.latest {
             Some(r) if r.at >= rest_since && now.saturating_since(r.at) <= self.max_age => {
                 if r.value < 0.0 {
                     Check::Clear { cm: None }
-                } else if r.value <= self.threshold_cm {
+                } else if r.value <= threshold_cm {
                     Check::Obstacle { cm: r.value }
                 } else {
                     Check::Clear { cm: Some(r.value) }
@@ -128,6 +137,20 @@ mod tests {
         assert_eq!(us.check(t, t), Check::Clear { cm: Some(30.5) });
         us.on_reading(t, -1.0, true);
         assert_eq!(us.check(t, t), Check::Clear { cm: None });
+    }
+
+    #[test]
+    fn a_robot_past_its_centre_checks_only_the_rest_of_the_move() {
+        let mut us = Ultrasound::new(45.0, Duration::from_millis(300));
+        let t = Instant::from_millis(10);
+        // a FORWARD cut short 16 cm in: a wall 36 cm ahead is 7 cm beyond the front face's stop
+        us.on_reading(t, 36.0, true);
+        assert_eq!(us.check(t, t), Check::Obstacle { cm: 36.0 });
+        assert_eq!(us.check_ahead(t, t, 16.0), Check::Clear { cm: Some(36.0) });
+        // 5 cm behind the centre the move is 50 cm long: a wall 47 cm ahead blocks it
+        us.on_reading(t, 47.0, true);
+        assert_eq!(us.check(t, t), Check::Clear { cm: Some(47.0) });
+        assert_eq!(us.check_ahead(t, t, -5.0), Check::Obstacle { cm: 47.0 });
     }
 
     #[test]
