@@ -76,6 +76,8 @@ pub struct CartoStats {
     pub turns_shifted: u64,
     /// Turns refused: no shift cleared the known echoes.
     pub turns_refused: u64,
+    /// Along-track fixes against a wall seen before.
+    pub wall_fixes: u64,
     /// Times the sensor board was declared lost.
     pub peer_lost_events: u64,
     /// Drive frames sent to the motor board.
@@ -355,7 +357,9 @@ impl Carto {
             );
             self.pilot.on_fault(now, &mut self.motor, "sensor board lost");
         }
-        self.sensors.estimate_imu_drift(now, &self.cfg);
+        let turning = self.motor.is_turning(now);
+        self.sensors.smooth_yaw(&self.cfg, turning);
+        self.sensors.estimate_imu_drift(now, &self.cfg, turning);
         self.motor.poll(now, &self.sensors);
         let health = self.health();
         self.pilot.poll(now, &mut self.motor, &self.sensors, &self.ultrasound, health);
@@ -459,6 +463,7 @@ impl Carto {
             corridor_blocked: p.corridor_blocked,
             turns_shifted: p.turns_shifted,
             turns_refused: p.turns_refused,
+            wall_fixes: p.wall_fixes,
             ..self.stats
         }
     }

@@ -66,6 +66,9 @@ pub struct CartoConfig {
     /// Correct the position along the track with the range to a wall ahead (`pilot/safety.rs`,
     /// "Along-track fix"), weighing the sonar against the wheels by the two sigmas below.
     pub along_fix: bool,
+    /// Also correct it against the surfaces seen before (`walls.rs`): an absolute fix that
+    /// removes drift built up over a long mission. Needs `along_fix` (its gain).
+    pub wall_fix: bool,
     /// Standard deviation of one sonar reading, metres (the profile's noise).
     pub sonar_sigma_m: f64,
     /// Standard deviation of the wheels' distance per metre driven (slip, stop error), metres.
@@ -73,6 +76,9 @@ pub struct CartoConfig {
     /// Check every turn against the echo points: drive back or forth first so the turning body
     /// clears them, or refuse the turn when that is not possible.
     pub safe_turns: bool,
+    /// When no shift along the heading clears the turning circle, try shifts across it too (the
+    /// mecanum wheels strafe).
+    pub strafe_shifts: bool,
 
     /// Cruise speed of a FORWARD, percent.
     pub cruise_pct: f64,
@@ -122,6 +128,11 @@ pub struct CartoConfig {
     pub imu_drift_tau_s: f64,
     /// Fastest change of the IMU drift estimate, degrees per minute.
     pub imu_drift_max_deg_per_min: f64,
+    /// Time constant with which the IMU pulls the wheels' heading in the smoothed yaw the
+    /// controller steers by, seconds (0 = the raw IMU; `SensorState::smooth_yaw`).
+    pub imu_smoothing_tau_s: f64,
+    /// The smoothed yaw restarts from the IMU when the two disagree by more than this, degrees.
+    pub imu_smoothing_reset_deg: f64,
     /// Motor telemetry (wheel rpm) younger than this is used to extrapolate odometry.
     pub telemetry_fresh: Duration,
     /// Odometry is extrapolated from the last reading by at most this long.
@@ -184,7 +195,9 @@ impl Default for CartoConfig {
             sonar_max_m: 4.0,
             clearance_m: 0.02,
             safe_turns: true,
+            strafe_shifts: true,
             along_fix: true,
+            wall_fix: true,
             sonar_sigma_m: 0.003,
             odometry_sigma_per_m: 0.01,
             cruise_pct: 30.0,
@@ -210,6 +223,8 @@ impl Default for CartoConfig {
             sensor_stale_after: Duration::from_millis(600),
             imu_drift_tau_s: 2.0,
             imu_drift_max_deg_per_min: 3.0,
+            imu_smoothing_tau_s: 0.5,
+            imu_smoothing_reset_deg: 1.0,
             telemetry_fresh: Duration::from_millis(150),
             max_extrapolation: Duration::from_millis(300),
             drive_resend_period: Duration::from_millis(100),

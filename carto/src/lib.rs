@@ -12,6 +12,7 @@ pub mod runtime;
 pub mod sensors;
 pub mod surroundings;
 pub mod ultrasound;
+pub mod walls;
 pub mod wire;
 
 pub use crate::carto::{Carto, CartoStats, CartoStatus};

@@ -46,7 +46,7 @@
 //! assert_eq!(m.take_drives(), vec![Drive::STOP]); // idle: the zero command goes out at once
 //! ```
 
-use robot_model::time::Instant;
+use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
 use crate::odometry::{CellOffset, Odometry};
@@ -155,7 +155,14 @@ struct Move {
     first_stop_err: Option<f64>,
     /// A look ([`Motor::start_look`]): a turn that leaves the reference heading where it was.
     look: bool,
+    /// The lateral offset from the cell's centre the move holds and ends on, metres (0: the
+    /// track through the centres; a shift before a turn, [`Motor::start_shift`], sets another).
+    track_left_m: f64,
 }
+
+/// How long after a turn the IMU drift estimate still waits (the body settles), see
+/// [`Motor::is_turning`].
+pub const SETTLE_AFTER_TURN: Duration = Duration::from_millis(500);
 
 /// The closed-loop motor controller (see the module docs).
 #[derive(Debug, Clone)]
@@ -170,6 +177,8 @@ pub struct Motor {
     last_baseline: Option<[i32; 4]>,
     odo: Odometry,
     coast_bias_m: f64,
+    /// When the last turn or look ended.
+    turn_ended: Option<Instant>,
     /// When the command last went from moving to zero.
     zeroed_at: Option<Instant>,
 }
@@ -188,6 +197,7 @@ impl Motor {
             last_baseline: None,
             odo: Odometry::default(),
             coast_bias_m: 0.0,
+            turn_ended: None,
             zeroed_at: None,
         }
     }
@@ -195,6 +205,12 @@ impl Motor {
     /// Whether a move is running.
     pub fn is_busy(&self) -> bool {
         self.current.is_some()
+    }
+
+    /// Whether a turn or a look is running, or ended less than [`SETTLE_AFTER_TURN`] ago.
+    pub fn is_turning(&self, now: Instant) -> bool {
+        self.current.is_some_and(|m| matches!(m.goal, Goal::Yaw { .. }))
+            || self.turn_ended.is_some_and(|t| now.saturating_since(t) < SETTLE_AFTER_TURN)
     }
 
     /// The command the board should be applying now.
@@ -210,6 +226,25 @@ impl Motor {
         let hold = self.hold_reference(now, s)?;
         self.last_baseline = Some(counts);
         self.begin(now, Goal::Distance { baseline: counts, target_m: metres }, Some(hold), 0.0, s);
+        Ok(())
+    }
+
+    /// Starts a shift of the body by `along_m` along the heading and `left_m` to its left (the
+    /// mecanum wheels strafe), relative to where the robot is, holding the heading. The odometry
+    /// keeps the new offset from the cell's centre; the next FORWARD, which aims at the next
+    /// centre on the track, takes it back.
+    pub fn start_shift(
+        &mut self,
+        now: Instant,
+        along_m: f64,
+        left_m: f64,
+        s: &SensorState,
+    ) -> Result<(), MoveError> {
+        let track_left_m = self.odo.offset().left_m + left_m;
+        self.start_forward(now, along_m, s)?;
+        if let Some(m) = self.current.as_mut() {
+            m.track_left_m = track_left_m;
+        }
         Ok(())
     }
 
@@ -356,6 +391,9 @@ impl Motor {
                 }
                 Step::Finished(result) => {
                     self.current = None;
+                    if matches!(m.goal, Goal::Yaw { .. }) {
+                        self.turn_ended = Some(now);
+                    }
                     self.learn_coast(&m);
                     if let (Ok(()), Goal::Yaw { target_deg }, false) = (&result, m.goal, m.look) {
                         self.reference_deg = Some(target_deg);
@@ -423,6 +461,7 @@ impl Motor {
             advance_m,
             first_stop_err: None,
             look,
+            track_left_m: 0.0,
         };
         let coasting_until = self.zeroed_at.map(|at| at + self.cfg.settle_time).filter(|until| now < *until);
         m.phase = match (goal, coasting_until) {

@@ -54,6 +54,7 @@ use crate::motor::Motor;
 use crate::sensors::SensorState;
 use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
+use crate::walls::Walls;
 use robot_model::grid::{GridPose, Heading, Move};
 
 mod commands;
@@ -148,6 +149,8 @@ pub struct PilotCounters {
     pub turns_shifted: u64,
     /// Turns refused: no shift along the heading cleared the known echoes.
     pub turns_refused: u64,
+    /// Along-track fixes against a wall seen before (`walls.rs`).
+    pub wall_fixes: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -252,6 +255,8 @@ pub struct Pilot {
     scan_missing: bool,
     /// The last straight reading at rest, for the along-track fix of the next one.
     last_straight: Option<safety::Straight>,
+    /// Surfaces seen straight ahead, for the absolute along-track fix.
+    walls: Walls,
 }
 
 impl Pilot {
@@ -273,6 +278,7 @@ impl Pilot {
             surroundings: Surroundings::default(),
             scan_missing: false,
             last_straight: None,
+            walls: Walls::default(),
         }
     }
 
@@ -335,6 +341,7 @@ impl Pilot {
                             motor.reset_odometry();
                             self.surroundings.clear();
                             self.last_straight = None;
+                            self.walls.clear();
                         }
                         self.pose = Some(pose);
                     }

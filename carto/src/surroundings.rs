@@ -148,6 +148,39 @@ impl Surroundings {
             .min_by(|a, b| a.0.total_cmp(&b.0))
     }
 
+    /// The smallest shift `(along, left)` of `robot`, metres, after which no point lies closer
+    /// than `radius_m` to its centre, on a grid of `step_m` up to `max_m` each way, the first step
+    /// excluded (smaller than a move's tolerance). Shifts along the heading come first (the
+    /// robot came from behind and ranged ahead); with `across`, shifts with a sideways part
+    /// follow, shortest first (the mecanum wheels strafe). `None` when none clears.
+    pub fn clearing_shift(
+        &self,
+        robot: Pose2,
+        radius_m: f64,
+        max_m: f64,
+        step_m: f64,
+        across: bool,
+    ) -> Option<(f64, f64)> {
+        let clears = |(along, left): (f64, f64)| {
+            let (x, y) = robot.offset(along, left);
+            self.inside_circle(Pose2 { x, y, ..robot }, radius_m).is_none()
+        };
+        let steps = (max_m / step_m).floor() as i32;
+        let along = (2..=steps).flat_map(|k| [-k, k]).map(|k| (f64::from(k) * step_m, 0.0));
+        if let Some(shift) = along.into_iter().find(|&d| clears(d)) {
+            return Some(shift);
+        }
+        if !across {
+            return None;
+        }
+        let mut sideways: Vec<(i32, i32)> = (-steps..=steps)
+            .flat_map(|a| (-steps..=steps).filter(|&l| l != 0).map(move |l| (a, l)))
+            .filter(|&(a, l)| a * a + l * l >= 4)
+            .collect();
+        sideways.sort_by_key(|&(a, l)| (a * a + l * l, a, l));
+        sideways.into_iter().map(|(a, l)| (f64::from(a) * step_m, f64::from(l) * step_m)).find(|&d| clears(d))
+    }
+
     /// The nearest point, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
     pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
         self.points
@@ -163,6 +196,31 @@ mod tests {
     use super::*;
 
     const MOUNT: f64 = 0.13;
+
+    #[test]
+    fn a_corner_needs_a_shift_across_the_heading() {
+        // facing east at the origin: a wall 16 cm ahead and one 16 cm to the left, the turning
+        // circle 19.7 cm
+        let robot = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        let mut s = Surroundings::default();
+        s.add_echo(robot, MOUNT, 0.16 - MOUNT);
+        s.add_echo(Pose2 { yaw_deg: 90.0, ..robot }, MOUNT, 0.16 - MOUNT);
+        assert_eq!(
+            s.clearing_shift(robot, 0.197, 0.11, 0.01, false),
+            None,
+            "backing off leaves the left wall"
+        );
+        let (along, left) = s.clearing_shift(robot, 0.197, 0.11, 0.01, true).expect("a diagonal shift");
+        assert!(along <= -0.037 && left <= -0.037, "({along}, {left})");
+        assert!(along.hypot(left) < 0.06, "not the shortest: ({along}, {left})");
+        // one wall only: backing off along the heading is enough, and comes first
+        let mut one = Surroundings::default();
+        one.add_echo(robot, MOUNT, 0.16 - MOUNT);
+        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01, true), Some((-0.04, 0.0)));
+        // walls ahead and behind: nothing within 11 cm clears both
+        one.add_echo(Pose2 { yaw_deg: 180.0, ..robot }, MOUNT, 0.16 - MOUNT);
+        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01, true), None);
+    }
 
     #[test]
     fn an_echo_lies_on_the_central_ray_in_the_grid_frame() {

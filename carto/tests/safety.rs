@@ -134,3 +134,36 @@ fn a_range_that_disagrees_too_much_is_another_object_and_is_ignored() {
     let (x1, second) = two_forwards_with_ranges(50.0);
     assert!((second - (0.30 - (x1 - 0.30))).abs() <= 0.01, "drove {second:.4} m");
 }
+
+/// Three FORWARDs east with the range ahead before each (`None`: no echo); how far the third
+/// drove and how many wall fixes Carto made.
+fn three_forwards(cfg: CartoConfig, ranges: [Option<f32>; 3]) -> (f64, u64) {
+    let mut h = ready_with(cfg);
+    let mut start = 0.0;
+    for (i, cm) in ranges.into_iter().enumerate() {
+        h.robot.distance_cm = cm.unwrap_or(-1.0);
+        h.run_ms(150);
+        start = h.robot.x;
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(8000, |h| h.move_done_count() == i + 1), "FORWARD {i}");
+    }
+    (h.robot.x - start, h.carto.stats().wall_fixes)
+}
+
+#[test]
+fn a_wall_seen_before_fixes_the_position_after_a_reading_without_echo() {
+    // The wall reads 95 cm from the start cell; no echo from the next cell (the relative fix
+    // has no pair); from the third cell it reads 32.5 cm where 35 were due: the robot is 2.5 cm
+    // further along than it believes, and only the wall seen two cells back can tell.
+    let ranges = [Some(95.0), None, Some(32.5)];
+    let (with_fix, fixes) = three_forwards(fake::test_config(), ranges);
+    let off = CartoConfig { wall_fix: false, ..fake::test_config() };
+    let (without, none) = three_forwards(off, ranges);
+    assert_eq!((fixes, none), (1, 0));
+    // gain σw²/(σw² + 2σs²) = 1/3 at 0.30 m cells: the third FORWARD drives 0.8 cm less
+    let gain = 1.0 / 3.0;
+    assert!(
+        (without - with_fix - gain * 0.025).abs() <= 0.003,
+        "third FORWARD: {with_fix:.4} m with the wall fix, {without:.4} m without"
+    );
+}

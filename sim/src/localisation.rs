@@ -10,6 +10,9 @@
 //! During a move the belief lags the robot by up to a cell by design (Cute learns the new cell
 //! when the move is done), so the errors are sampled only at those moments. The report keeps the
 //! largest of each, when and where it happened, and the number of samples.
+//! `RUST_LOG=sim::localisation=trace` logs every sample: the believed cell and how far east
+//! (`dx_m`) and north (`dy_m`) of its centre the robot really is (how the long-mission drift of
+//! issue 10 was traced).
 //!
 //! ```
 //! use robot_model::grid::{GridFrame, Heading};
@@ -66,6 +69,15 @@ impl Localisation {
         let position = f64::from((pose.x - cx).hypot(pose.y - cy));
         let heading_error = f64::from(angle_between(pose.theta, heading.world_angle()).to_degrees());
         self.samples += 1;
+        tracing::trace!(
+            t_s,
+            row,
+            col,
+            dx_m = pose.x - cx,
+            dy_m = pose.y - cy,
+            heading_error,
+            "belief against truth"
+        );
         if position > self.position_error_max_m {
             self.position_error_max_m = position;
             self.position_error_at_s = t_s;

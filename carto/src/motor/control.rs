@@ -153,7 +153,7 @@ impl Motor {
                         .min(cfg.min_drive_pct + ramp)
                         .max(cfg.min_drive_pct);
                     // Lateral hold: strafe back to the track while driving.
-                    let left = self.odo.predicted(now, s, cfg).left_m;
+                    let left = self.odo.predicted(now, s, cfg).left_m - m.track_left_m;
                     let vy =
                         (-cfg.lateral_gain_pct_per_m * left).clamp(-cfg.lateral_max_pct, cfg.lateral_max_pct);
                     Step::Continue(Drive {
@@ -179,7 +179,7 @@ impl Motor {
                 if let Err(e) = self.check_fresh(m, now, s) {
                     return Step::Finished(Err(e));
                 }
-                let err = -self.odo.predicted(now, s, cfg).left_m;
+                let err = m.track_left_m - self.odo.predicted(now, s, cfg).left_m;
                 let speed = self.lateral_speed_mps(now, s).abs();
                 let lead = (speed * cfg.stop_lead_s).max(0.3 * cfg.lateral_tolerance_m);
                 if err.abs() <= lead || sign_of(err) != sign {
@@ -209,7 +209,7 @@ impl Motor {
                 let tol = if is_distance { cfg.distance_tolerance_m } else { cfg.heading_tolerance_deg };
                 // A distance move also ends on its track (the odometry has integrated the readings
                 // at rest by now: `poll` updates it first).
-                let left = if is_distance { self.odo.offset().left_m } else { 0.0 };
+                let left = if is_distance { self.odo.offset().left_m - m.track_left_m } else { 0.0 };
                 if let Goal::Distance { target_m, .. } = m.goal
                     && m.corrections == 0
                     && m.first_stop_err.is_none()

@@ -30,6 +30,10 @@
 //!   ([`CartoConfig::odometry_sigma_per_m`]) and σs one reading's ([`CartoConfig::sonar_sigma_m`]).
 //!   With the default robot (σs 3 mm, σw 4.5 mm per 0.45 m cell) the gain is 0.53; with a 2 cm
 //!   sonar it is 0.03. Wheel slip and the stop error then do not add up over a row.
+//! - **Wall fix.** A straight reading closer than [`WALL_FIX_MAX_M`] that matches a surface seen
+//!   before from the same row or column ([`crate::walls`]) corrects the position along the track
+//!   absolutely, with the same gain, instead of the relative fix: drift that built up over a long
+//!   mission is removed too ([`CartoConfig::wall_fix`]).
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
@@ -50,6 +54,9 @@ const SHIFT_STEP_M: f64 = 0.01;
 pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// A larger disagreement between sonar and wheels means two different objects answered, metres.
 pub const ALONG_FIX_MAX_ERROR_M: f64 = 0.05;
+/// Echoes further than this are not kept as walls nor matched with them, metres (the cone is
+/// then at most 26 cm wide, about the body's width).
+pub const WALL_FIX_MAX_M: f64 = 1.0;
 
 /// A straight reading at rest, remembered for the along-track fix.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -66,6 +73,8 @@ pub(super) struct Safety {
     cell_m: f64,
     /// Kalman gain of the along-track fix (0: off).
     along_fix_gain: f64,
+    /// Also fix against the walls seen before.
+    wall_fix: bool,
     mount_m: f64,
     half_cone_deg: f64,
     max_range_m: f64,
@@ -75,6 +84,8 @@ pub(super) struct Safety {
     /// The swept circle of a turn plus the clearance: no known echo may lie inside it.
     turn_clear_m: f64,
     safe_turns: bool,
+    /// Shifts before a turn may strafe across the heading too.
+    strafe_shifts: bool,
 }
 
 impl Safety {
@@ -89,6 +100,7 @@ impl Safety {
             } else {
                 0.0
             },
+            wall_fix: cfg.wall_fix,
             mount_m: cfg.sonar_mount_m,
             half_cone_deg: 0.5 * cfg.sonar_cone_deg,
             max_range_m: cfg.sonar_max_m,
@@ -97,6 +109,7 @@ impl Safety {
             clearance_m: cfg.clearance_m,
             turn_clear_m: cfg.turn_radius_m() + cfg.clearance_m,
             safe_turns: cfg.safe_turns,
+            strafe_shifts: cfg.strafe_shifts,
         }
     }
 
@@ -147,16 +160,28 @@ impl Pilot {
         };
         let range_m = f64::from(cm) / 100.0;
         let along_m = motor.odometry().offset().along_m;
-        if let Some(prev) = self.last_straight.take()
+        let s = self.safety;
+        let wall = if s.wall_fix && s.along_fix_gain > 0.0 && range_m <= WALL_FIX_MAX_M {
+            self.walls.observe(pose, s.cell_m, along_m, s.mount_m + range_m)
+        } else {
+            None
+        };
+        let prev = self.last_straight.take();
+        if let Some(drift) = wall {
+            let fix = s.along_fix_gain * drift;
+            tracing::debug!(drift, fix, "along-track fix from a wall seen before");
+            self.counters.wall_fixes += 1;
+            motor.correct_along(fix);
+        } else if let Some(prev) = prev
             && prev.pose.heading == pose.heading
             && prev.pose.ahead() == Some((pose.x, pose.y))
             && prev.range_m <= ALONG_FIX_MAX_M
         {
             let by_sonar = prev.range_m - range_m;
-            let by_wheels = self.safety.cell_m + along_m - prev.along_m;
+            let by_wheels = s.cell_m + along_m - prev.along_m;
             let error = by_wheels - by_sonar;
             if error.abs() <= ALONG_FIX_MAX_ERROR_M {
-                let fix = -self.safety.along_fix_gain * error;
+                let fix = -s.along_fix_gain * error;
                 tracing::debug!(by_sonar, by_wheels, fix, "along-track fix from the range ahead");
                 motor.correct_along(fix);
             }
@@ -280,21 +305,19 @@ impl Pilot {
         let Some(hit) = self.surroundings.inside_circle(robot, radius) else {
             return self.start_turn(now, mv, motor, sensors);
         };
-        let steps = (0.25 * s.cell_m / SHIFT_STEP_M).floor() as i32;
-        let shift = (2..=steps).flat_map(|k| [-k, k]).map(|k| f64::from(k) * SHIFT_STEP_M).find(|&d| {
-            let (x, y) = robot.offset(d, 0.0);
-            self.surroundings.inside_circle(Pose2 { x, y, ..robot }, radius).is_none()
-        });
+        let max_m = 0.25 * s.cell_m;
+        let shift = self.surroundings.clearing_shift(robot, radius, max_m, SHIFT_STEP_M, s.strafe_shifts);
         match shift {
-            Some(metres) => {
+            Some((metres, left_m)) => {
                 tracing::info!(
                     metres,
+                    left_m,
                     echo_along_m = hit.0,
                     echo_left_m = hit.1,
                     "turn: driving clear of a known echo first"
                 );
                 self.counters.turns_shifted += 1;
-                match motor.start_forward(now, metres, sensors) {
+                match motor.start_shift(now, metres, left_m, sensors) {
                     Ok(()) => self.stage = Stage::Shifting { mv },
                     Err(e) => self.fail(now, &format!("shift before a turn: {e}")),
                 }
@@ -302,7 +325,7 @@ impl Pilot {
             None => {
                 self.counters.turns_refused += 1;
                 let why = format!(
-                    "turn refused: an echo {:.0} cm ahead and {:.0} cm left lies in the turning circle and no shift of up to {:.0} cm clears it",
+                    "turn refused: an echo {:.0} cm ahead and {:.0} cm left lies in the turning circle and no shift of up to {:.0} cm along or across clears it",
                     hit.0 * 100.0,
                     hit.1 * 100.0,
                     0.25 * s.cell_m * 100.0
