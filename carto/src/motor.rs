@@ -164,6 +164,23 @@ struct Move {
 /// [`Motor::is_turning`].
 pub const SETTLE_AFTER_TURN: Duration = Duration::from_millis(500);
 
+impl Move {
+    /// A move starting now: not a look, on the track through the centres.
+    fn new(now: Instant, goal: Goal, hold_deg: Option<f64>, advance_m: f64) -> Move {
+        Move {
+            goal,
+            phase: Phase::Active { since: now, sign: 0.0 },
+            started: now,
+            corrections: 0,
+            hold_deg,
+            advance_m,
+            first_stop_err: None,
+            look: false,
+            track_left_m: 0.0,
+        }
+    }
+}
+
 /// The closed-loop motor controller (see the module docs).
 #[derive(Debug, Clone)]
 pub struct Motor {
@@ -240,11 +257,14 @@ impl Motor {
         left_m: f64,
         s: &SensorState,
     ) -> Result<(), MoveError> {
+        let counts = self.fresh_counts(now, s)?;
+        let hold = self.hold_reference(now, s)?;
+        // after hold_reference: a re-learnt reference rotates the offset into its frame
         let track_left_m = self.odo.offset().left_m + left_m;
-        self.start_forward(now, along_m, s)?;
-        if let Some(m) = self.current.as_mut() {
-            m.track_left_m = track_left_m;
-        }
+        self.last_baseline = Some(counts);
+        let goal = Goal::Distance { baseline: counts, target_m: along_m };
+        let m = Move { track_left_m, ..Move::new(now, goal, Some(hold), 0.0) };
+        self.begin_move(now, m, s);
         Ok(())
     }
 
@@ -325,7 +345,8 @@ impl Motor {
         self.fresh_yaw(now, s)?;
         let reference =
             self.reference_deg.ok_or(MoveError::MissingReading { sensor: "reference heading" })?;
-        self.begin_move(now, Goal::Yaw { target_deg: reference + offset_deg }, None, 0.0, true, s);
+        let goal = Goal::Yaw { target_deg: reference + offset_deg };
+        self.begin_move(now, Move { look: true, ..Move::new(now, goal, None, 0.0) }, s);
         Ok(())
     }
 
@@ -341,14 +362,17 @@ impl Motor {
 
     /// Aborts any move and commands zero at once. No outcome is reported for an aborted move.
     pub fn stop(&mut self, now: Instant) {
-        if let Some(m) = self.current.take()
+        let taken = self.current.take();
+        if let Some(m) = taken
             && let Goal::Yaw { .. } = m.goal
-            && !m.look
-            && !matches!(m.phase, Phase::Rest { .. })
         {
-            // A turn cut short leaves the heading between two grid headings (one still waiting
-            // for rest has not turned yet).
-            self.reference_deg = None;
+            // the body may still be rotating: the drift estimate waits as after a finished turn
+            self.turn_ended = Some(now);
+            if !m.look && !matches!(m.phase, Phase::Rest { .. }) {
+                // A turn cut short leaves the heading between two grid headings (one still
+                // waiting for rest has not turned yet).
+                self.reference_deg = None;
+            }
         }
         self.outcome = None;
         self.set_command(now, Drive::STOP, true);
@@ -439,30 +463,12 @@ impl Motor {
     }
 
     fn begin(&mut self, now: Instant, goal: Goal, hold_deg: Option<f64>, advance_m: f64, s: &SensorState) {
-        self.begin_move(now, goal, hold_deg, advance_m, false, s);
+        self.begin_move(now, Move::new(now, goal, hold_deg, advance_m), s);
     }
 
-    fn begin_move(
-        &mut self,
-        now: Instant,
-        goal: Goal,
-        hold_deg: Option<f64>,
-        advance_m: f64,
-        look: bool,
-        s: &SensorState,
-    ) {
+    fn begin_move(&mut self, now: Instant, mut m: Move, s: &SensorState) {
         self.outcome = None;
-        let mut m = Move {
-            goal,
-            phase: Phase::Active { since: now, sign: 0.0 },
-            started: now,
-            corrections: 0,
-            hold_deg,
-            advance_m,
-            first_stop_err: None,
-            look,
-            track_left_m: 0.0,
-        };
+        let goal = m.goal;
         let coasting_until = self.zeroed_at.map(|at| at + self.cfg.settle_time).filter(|until| now < *until);
         m.phase = match (goal, coasting_until) {
             (Goal::Yaw { .. }, Some(until)) => {
@@ -473,5 +479,39 @@ impl Motor {
         };
         self.current = Some(m);
         self.poll(now, s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sensors::SensorEvent;
+
+    fn at_rest(s: &mut SensorState, now: Instant) {
+        s.ingest(now, SensorEvent::Heading { cw_deg: 0.0 });
+        for wheel in 0..4 {
+            s.ingest(now, SensorEvent::Encoder { wheel, count: 0 });
+        }
+    }
+
+    #[test]
+    fn a_turn_counts_as_turning_until_it_has_settled_also_when_stopped() {
+        let mut motor = Motor::new(CartoConfig::default());
+        let mut s = SensorState::default();
+        let t0 = Instant::from_millis(1000);
+        at_rest(&mut s, t0);
+        assert!(!motor.is_turning(t0));
+        motor.start_turn(t0, true, &s).unwrap();
+        assert!(motor.is_turning(t0));
+        // cut short by a STOP: the body may still rotate, so it counts as turning a while longer
+        let stop = t0 + Duration::from_millis(200);
+        motor.stop(stop);
+        assert!(motor.is_turning(stop + Duration::from_millis(100)));
+        assert!(!motor.is_turning(stop + SETTLE_AFTER_TURN));
+        // a FORWARD is not a turn
+        let later = stop + Duration::from_millis(1000);
+        at_rest(&mut s, later);
+        motor.start_forward(later, 0.3, &s).unwrap();
+        assert!(!motor.is_turning(later));
     }
 }

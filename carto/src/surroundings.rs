@@ -149,8 +149,8 @@ impl Surroundings {
     }
 
     /// The smallest shift `(along, left)` of `robot`, metres, after which no point lies closer
-    /// than `radius_m` to its centre, on a grid of `step_m` up to `max_m` each way, the first step
-    /// excluded (smaller than a move's tolerance). Shifts along the heading come first (the
+    /// than `radius_m` to its centre, on a grid of `step_m` up to `max_m` each way; no part is a
+    /// single step (a move ends within its tolerance and might not drive it). Shifts along the heading come first (the
     /// robot came from behind and ranged ahead); with `across`, shifts with a sideways part
     /// follow, shortest first (the mecanum wheels strafe). `None` when none clears.
     pub fn clearing_shift(
@@ -173,9 +173,10 @@ impl Surroundings {
         if !across {
             return None;
         }
+        // no part of one step: a move ends within its tolerance (1 cm) and might not drive it
         let mut sideways: Vec<(i32, i32)> = (-steps..=steps)
-            .flat_map(|a| (-steps..=steps).filter(|&l| l != 0).map(move |l| (a, l)))
-            .filter(|&(a, l)| a * a + l * l >= 4)
+            .filter(|a| *a == 0 || a.abs() >= 2)
+            .flat_map(|a| (-steps..=steps).filter(|l| l.abs() >= 2).map(move |l| (a, l)))
             .collect();
         sideways.sort_by_key(|&(a, l)| (a * a + l * l, a, l));
         sideways.into_iter().map(|(a, l)| (f64::from(a) * step_m, f64::from(l) * step_m)).find(|&d| clears(d))

@@ -86,22 +86,34 @@ impl Walls {
     /// the heading the robot really is than it believes, when the reading matches a kept wall;
     /// otherwise keeps the reading as a new wall and returns `None`.
     pub fn observe(&mut self, pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) -> Option<f64> {
+        let drift = self.drift(pose, cell_m, along_m, ahead_m);
+        if drift.is_none() {
+            self.remember(pose, cell_m, along_m, ahead_m);
+        }
+        drift
+    }
+
+    /// How much farther along the heading the robot really is than it believes, by the nearest
+    /// kept wall within [`MATCH_M`] of this reading (see [`Walls::observe`]); `None` if none.
+    pub fn drift(&self, pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) -> Option<f64> {
         let (along_cells, lateral) = cells(pose);
         let depth_m = f64::from(along_cells) * cell_m + along_m + ahead_m;
-        let nearest = self
-            .walls
+        self.walls
             .iter()
             .filter(|w| w.heading == pose.heading && w.lateral == lateral)
             .map(|w| w.depth_m - depth_m)
             .filter(|gap| gap.abs() <= MATCH_M)
-            .min_by(|a, b| a.abs().total_cmp(&b.abs()));
-        if nearest.is_none() {
-            if self.walls.len() >= CAPACITY {
-                self.walls.remove(0);
-            }
-            self.walls.push(Wall { heading: pose.heading, lateral, depth_m });
+            .min_by(|a, b| a.abs().total_cmp(&b.abs()))
+    }
+
+    /// Keeps this reading as a new wall (see [`Walls::observe`]).
+    pub fn remember(&mut self, pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) {
+        let (along_cells, lateral) = cells(pose);
+        let depth_m = f64::from(along_cells) * cell_m + along_m + ahead_m;
+        if self.walls.len() >= CAPACITY {
+            self.walls.remove(0);
         }
-        nearest
+        self.walls.push(Wall { heading: pose.heading, lateral, depth_m });
     }
 }
 

@@ -161,11 +161,9 @@ impl Pilot {
         let range_m = f64::from(cm) / 100.0;
         let along_m = motor.odometry().offset().along_m;
         let s = self.safety;
-        let wall = if s.wall_fix && s.along_fix_gain > 0.0 && range_m <= WALL_FIX_MAX_M {
-            self.walls.observe(pose, s.cell_m, along_m, s.mount_m + range_m)
-        } else {
-            None
-        };
+        let usable = s.wall_fix && s.along_fix_gain > 0.0 && range_m <= WALL_FIX_MAX_M;
+        let ahead_m = s.mount_m + range_m;
+        let wall = if usable { self.walls.drift(pose, s.cell_m, along_m, ahead_m) } else { None };
         let prev = self.last_straight.take();
         if let Some(drift) = wall {
             let fix = s.along_fix_gain * drift;
@@ -185,6 +183,10 @@ impl Pilot {
                 tracing::debug!(by_sonar, by_wheels, fix, "along-track fix from the range ahead");
                 motor.correct_along(fix);
             }
+        }
+        if usable && wall.is_none() {
+            // a new wall, placed from the position the relative fix has just corrected
+            self.walls.remember(pose, s.cell_m, motor.odometry().offset().along_m, ahead_m);
         }
         let along_m = motor.odometry().offset().along_m;
         self.last_straight = Some(Straight { pose, range_m, along_m });
