@@ -239,11 +239,7 @@ impl Motor {
     /// to where the robot is. It holds the heading and the track (lateral offset zero) but does
     /// not move the cell origin: the cartography FORWARD is [`Motor::start_next_cell`].
     pub fn start_forward(&mut self, now: Instant, metres: f64, s: &SensorState) -> Result<(), MoveError> {
-        let counts = self.fresh_counts(now, s)?;
-        let hold = self.hold_reference(now, s)?;
-        self.last_baseline = Some(counts);
-        self.begin(now, Goal::Distance { baseline: counts, target_m: metres }, Some(hold), 0.0, s);
-        Ok(())
+        self.start_relative(now, metres, None, s)
     }
 
     /// Starts a shift of the body by `along_m` along the heading and `left_m` to its left (the
@@ -257,14 +253,25 @@ impl Motor {
         left_m: f64,
         s: &SensorState,
     ) -> Result<(), MoveError> {
+        self.start_relative(now, along_m, Some(left_m), s)
+    }
+
+    /// A move of `metres` along the heading from where the robot is, holding the heading, on the
+    /// track through the centres (`left_m` `None`) or `left_m` left of where the robot is now.
+    fn start_relative(
+        &mut self,
+        now: Instant,
+        metres: f64,
+        left_m: Option<f64>,
+        s: &SensorState,
+    ) -> Result<(), MoveError> {
         let counts = self.fresh_counts(now, s)?;
         let hold = self.hold_reference(now, s)?;
         // after hold_reference: a re-learnt reference rotates the offset into its frame
-        let track_left_m = self.odo.offset().left_m + left_m;
+        let track_left_m = left_m.map_or(0.0, |l| self.odo.offset().left_m + l);
         self.last_baseline = Some(counts);
-        let goal = Goal::Distance { baseline: counts, target_m: along_m };
-        let m = Move { track_left_m, ..Move::new(now, goal, Some(hold), 0.0) };
-        self.begin_move(now, m, s);
+        let goal = Goal::Distance { baseline: counts, target_m: metres };
+        self.begin_move(now, Move { track_left_m, ..Move::new(now, goal, Some(hold), 0.0) }, s);
         Ok(())
     }
 
@@ -362,8 +369,7 @@ impl Motor {
 
     /// Aborts any move and commands zero at once. No outcome is reported for an aborted move.
     pub fn stop(&mut self, now: Instant) {
-        let taken = self.current.take();
-        if let Some(m) = taken
+        if let Some(m) = self.current.take()
             && let Goal::Yaw { .. } = m.goal
         {
             // the body may still be rotating: the drift estimate waits as after a finished turn

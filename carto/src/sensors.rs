@@ -168,17 +168,21 @@ impl SensorState {
     /// ago: the wheels slip most then) and when the IMU disagrees with the prediction by
     /// more than [`CartoConfig::imu_smoothing_reset_deg`] (a slip, a collision).
     pub fn smooth_yaw(&mut self, cfg: &CartoConfig, turning: bool) {
-        let (Some(y), Some(wheel_deg)) = (self.yaw, self.wheel_yaw_deg(cfg)) else {
-            self.smooth = None;
-            return;
-        };
         if cfg.imu_smoothing_tau_s <= 0.0 {
             self.smooth = None;
             return;
         }
+        if let (Some(last), Some(y)) = (self.smooth, self.yaw)
+            && last.at == y.at
+        {
+            return; // no new IMU sample since the last poll
+        }
+        let (Some(y), Some(wheel_deg)) = (self.yaw, self.wheel_yaw_deg(cfg)) else {
+            self.smooth = None;
+            return;
+        };
         let restart = SmoothYaw { value: y.value, at: y.at, wheel_deg };
         self.smooth = match self.smooth {
-            Some(last) if last.at == y.at => Some(last),
             Some(last) if !turning && y.at > last.at => {
                 let predicted = last.value + (wheel_deg - last.wheel_deg);
                 let innovation = y.value - predicted;

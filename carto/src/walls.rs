@@ -96,8 +96,7 @@ impl Walls {
     /// How much farther along the heading the robot really is than it believes, by the nearest
     /// kept wall within [`MATCH_M`] of this reading (see [`Walls::observe`]); `None` if none.
     pub fn drift(&self, pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) -> Option<f64> {
-        let (along_cells, lateral) = cells(pose);
-        let depth_m = f64::from(along_cells) * cell_m + along_m + ahead_m;
+        let (lateral, depth_m) = place(pose, cell_m, along_m, ahead_m);
         self.walls
             .iter()
             .filter(|w| w.heading == pose.heading && w.lateral == lateral)
@@ -108,13 +107,19 @@ impl Walls {
 
     /// Keeps this reading as a new wall (see [`Walls::observe`]).
     pub fn remember(&mut self, pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) {
-        let (along_cells, lateral) = cells(pose);
-        let depth_m = f64::from(along_cells) * cell_m + along_m + ahead_m;
+        let (lateral, depth_m) = place(pose, cell_m, along_m, ahead_m);
         if self.walls.len() >= CAPACITY {
             self.walls.remove(0);
         }
         self.walls.push(Wall { heading: pose.heading, lateral, depth_m });
     }
+}
+
+/// Where a reading puts its surface: the row or column across the heading, and the depth along
+/// it (see the module docs).
+fn place(pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) -> (i32, f64) {
+    let (along_cells, lateral) = cells(pose);
+    (lateral, f64::from(along_cells) * cell_m + along_m + ahead_m)
 }
 
 /// The cell index along the pose's heading (growing in that direction) and across it.
