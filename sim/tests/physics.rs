@@ -206,6 +206,32 @@ fn scraping_a_wall_with_the_side_is_a_collision_but_not_a_bumper_press() {
     assert!(!bumped, "a side contact pressed the front bumper");
 }
 
+/// Drives east at 0.36 m/s (the pilot's cruise) past a 3 cm table leg whose edge lies `gap` metres
+/// beside the body's left side; returns how far the robot was pushed across its track and the
+/// collisions counted.
+fn graze_a_leg(gap: f32) -> (f32, u32) {
+    let p = quiet_profile();
+    let leg_y = p.geometry.body_width_m / 2.0 + 0.03 + gap;
+    let s = room(&format!("Circle(center: (0.6, {leg_y}), radius: 0.03)"));
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    drive(&mut body, setpoints(&p, Twist { vx: 0.36, vy: 0.0, omega: 0.0 }), 3.0);
+    (body.pose().y.abs(), body.world().collisions())
+}
+
+#[test]
+fn a_leg_pushes_the_robot_only_when_it_touches_the_body() {
+    // measured-default (issue 10): with rapier's contact recycling on, a table leg 1 cm beside
+    // the body pushed the robot 7 mm off its track through a contact point left over from an
+    // earlier step, and the twin's robot acted about a centimetre wider than the real one.
+    let (pushed_m, collisions) = graze_a_leg(0.005);
+    assert!(pushed_m < 1e-4, "a leg 5 mm away pushed the robot {pushed_m:.4} m");
+    assert_eq!(collisions, 0);
+    // A leg 5 mm inside the body's path pushes it aside by about that much, and counts.
+    let (pushed_m, collisions) = graze_a_leg(-0.005);
+    assert!((0.003..0.01).contains(&pushed_m), "pushed {pushed_m:.4} m across the track");
+    assert_eq!(collisions, 1);
+}
+
 /// Where segment a→b crosses segment c→d, as the fraction along a→b, if it does.
 fn crossing(a: (f32, f32), b: (f32, f32), c: (f32, f32), d: (f32, f32)) -> Option<f32> {
     let r = (b.0 - a.0, b.1 - a.1);
