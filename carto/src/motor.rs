@@ -539,7 +539,7 @@ mod tests {
             let applied =
                 if sent.len() > (delay_ms / 10) as usize { sent.pop_front().unwrap_or(0) } else { 0 };
             yaw += f64::from(applied) * deg_per_pct * step.as_secs_f64();
-            now = now + step;
+            now += step;
             s.ingest(now, SensorEvent::Heading { cw_deg: -yaw });
             motor.poll(now, &s);
         }

@@ -150,9 +150,10 @@ impl Surroundings {
 
     /// The smallest shift `(along, left)` of `robot`, metres, after which no point lies closer
     /// than `radius_m` to its centre, on a grid of `step_m` up to `max_m` each way; no part is a
-    /// single step (a move ends within its tolerance and might not drive it). Shifts along the heading come first (the
-    /// robot came from behind and ranged ahead); with `across`, shifts with a sideways part
-    /// follow, shortest first (the mecanum wheels strafe). `None` when none clears.
+    /// single step (a move ends within its tolerance and might not drive it). Shifts along the
+    /// heading come first (the robot came from behind and ranged ahead); with `across`, shifts
+    /// with a sideways part follow, shortest first (the mecanum wheels strafe). `None` when none
+    /// clears.
     pub fn clearing_shift(
         &self,
         robot: Pose2,

@@ -2,8 +2,8 @@
 //! full size, the default 0.45 m cells. Six of them pass today on their own seeds; this test
 //! keeps those six passing and prints every verdict. The other six (clutter, default, furnished,
 //! goto, lossy-motor, noisy) touch furniture the sonar cannot see, so for them it asserts only
-//! what must hold in any room: the run ends, links the scenario does not damage are clean, and a run with a collision
-//! names its first contact (README, "Scenarios drawn as measured").
+//! what must hold in any room: the run ends, links the scenario does not damage are clean, and a
+//! run with a collision names its first contact (README, "Scenarios drawn as measured").
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 

@@ -228,19 +228,19 @@ impl Motor {
                         tracing::warn!(left_m = left, "move ends off its track after all corrections");
                         return Step::Finished(Ok(()));
                     }
-                    if m.advance_m != 0.0 && err.abs() <= 0.25 * m.advance_m.abs() {
-                        // A cell move that stopped near the next centre (lost frames ate the
-                        // nudges): the robot is in the next cell, the odometry keeps the residual
-                        // and the next FORWARD, which aims at a centre, absorbs it.
-                        tracing::warn!(error_m = err, "cell move ends off the centre after all corrections");
-                        return Step::Finished(Ok(()));
-                    }
-                    if !is_distance && err.abs() <= TURN_ACCEPT_TOLERANCES * tol {
-                        // A turn whose nudges keep overshooting the tolerance (a slow motor link:
-                        // the zero command lands after the robot has passed the target) but that
-                        // has turned to within a few degrees: the reference heading still moves by
-                        // exactly 90°, and the next FORWARD's heading hold steers the rest out.
-                        tracing::warn!(error_deg = err, "turn ends off its target after all corrections");
+                    // Close enough where lost frames or a slow link ate the nudges. A cell move
+                    // near the next centre: the robot is in the next cell, the odometry keeps the
+                    // residual and the next FORWARD, which aims at a centre, absorbs it. A turn
+                    // within a few degrees (each nudge's zero command landed after the robot had
+                    // passed the target): the reference heading still moves by exactly 90°, and
+                    // the next FORWARD's heading hold steers the rest out.
+                    let close_enough = if is_distance {
+                        m.advance_m != 0.0 && err.abs() <= 0.25 * m.advance_m.abs()
+                    } else {
+                        err.abs() <= TURN_ACCEPT_TOLERANCES * tol
+                    };
+                    if close_enough {
+                        tracing::warn!(error = err, "move ends off its target after all corrections");
                         return Step::Finished(Ok(()));
                     }
                     return Step::Finished(Err(MoveError::NotConverged {
