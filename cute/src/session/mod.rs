@@ -39,7 +39,7 @@
 //! - Always tolerated: unsolicited ROBOT_POSITION_RECEIVED, stray MOVE_DONE, unknown ids, frames
 //!   split or merged arbitrarily. A fatal framing error drops the connection
 //!   ([`Cute::close_requested`]).
-//! - Timeouts: no ROBOT_POSITION_RECEIVED within `move_timeout` → [`CuteEvent::MoveTimeout`] and
+//! - Timeouts: no ROBOT_POSITION_RECEIVED within `ack_timeout` → [`CuteEvent::MoveTimeout`] and
 //!   the position is re-sent; no MOVE_DONE within `move_timeout` per command →
 //!   [`CuteEvent::MoveTimeout`], STOP_ROBOT, mission dropped.
 //!
@@ -231,7 +231,7 @@ impl Cute {
         self.now = now;
         let ack_deadline = match self.config.compat {
             Compat::Explobot2024 => None,
-            Compat::Default => Some(now + self.config.move_timeout),
+            Compat::Default => Some(now + self.config.ack_timeout),
         };
         let Some(reconnect) = self.connection.connected(ack_deadline) else {
             return;
@@ -296,7 +296,7 @@ impl Cute {
     /// Checks timeouts and sends whatever is due.
     pub fn poll(&mut self, now: Instant) {
         self.now = now;
-        if self.connection.ack_overdue(now, now + self.config.move_timeout) {
+        if self.connection.ack_overdue(now, now + self.config.ack_timeout) {
             self.counters.timeouts += 1;
             self.events.push(CuteEvent::MoveTimeout { waiting_for: Waiting::PositionAck });
             if self.quirks.position_unanswered() {
