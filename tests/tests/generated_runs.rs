@@ -1,6 +1,6 @@
 //! Twenty generated rooms, four of each style, run end to end in CI (issue 10).
 //!
-//! They do not meet issue 10's pass criteria today (3 of 200 do; README, "Generated rooms"), so
+//! They do not meet issue 10's pass criteria today (2 of 200 do; README, "Generated rooms"), so
 //! this test does not assert them: it prints each room's verdict and asserts what must hold in
 //! any room, touched or not: the run ends (mapped, or at the room's time limit), no link carries a
 //! decode error (no fault is injected), Cute and Carto agree on the protocol (no mission error),
@@ -56,4 +56,16 @@ fn a_generated_room_runs_the_same_twice() {
     let (a, b) = (run(RoomStyle::ALL[0], 3), run(RoomStyle::ALL[0], 3));
     assert_eq!(a.link_log_sha256, b.link_log_sha256);
     assert_eq!((a.collisions, a.first_contact.clone()), (b.collisions, b.first_contact.clone()));
+}
+
+/// Generated warehouse seed 19: after collisions had pushed the robot about, an echo point lay
+/// inside the body where Carto believed it stood, so inside every turning circle, and Carto
+/// refused every turn Cute asked for: 21,842 moves and 43 simulated minutes, until the room's
+/// time limit. The body now clears the points it stands on (`carto::surroundings`), and the run
+/// ends on its own after a few hundred moves (343 today). It still fails issue 10's criteria.
+#[test]
+fn a_point_under_the_body_does_not_make_carto_refuse_every_turn() {
+    let r = run(RoomStyle::Warehouse, 19);
+    println!("warehouse seed 19: {} moves, {:.0} s, {} collisions", r.moves, r.sim_time_s, r.collisions);
+    assert!(r.moves < 2_000, "warehouse seed 19: {} moves", r.moves);
 }

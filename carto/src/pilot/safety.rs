@@ -12,6 +12,9 @@
 //!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
 //!   threshold does). Otherwise Carto answers
 //!   `SET_OBSTACLE_POSITION` for the cell ahead, as for a close straight echo.
+//! - **Footprint.** Before every reading at rest and every turn check, the points inside the
+//!   body's rectangle where Carto believes it stands are forgotten
+//!   ([`crate::surroundings::Surroundings::clear_footprint`]).
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
 //!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
 //!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
@@ -198,6 +201,7 @@ impl Pilot {
         if let Some(robot) = self.believed(motor, sensors) {
             let s = self.safety;
             let range = cm.map(|cm| f64::from(cm) / 100.0);
+            self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
             self.surroundings.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
         }
     }
@@ -304,6 +308,7 @@ impl Pilot {
             Some(robot) if s.safe_turns => robot,
             _ => return self.start_turn(now, mv, motor, sensors),
         };
+        self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
         let Some(hit) = self.surroundings.inside_circle(robot, radius) else {
             return self.start_turn(now, mv, motor, sensors);
         };
