@@ -16,6 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::localisation::Localisation;
 use crate::scenario::Expectations;
 use crate::truth::RobotTruth;
+use crate::world::Unphysical;
 
 /// Traffic on one direction of one link.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -216,6 +217,10 @@ pub struct Report {
     pub collisions: u32,
     /// The first contact, if there was one.
     pub first_contact: Option<FirstContact>,
+    /// Steps after which the body moved faster than its wheels can drive it
+    /// ([`SimWorld::unphysical`](crate::world::SimWorld::unphysical)): when there are any, what
+    /// the run did after `first_at_s` is not physical.
+    pub unphysical: Unphysical,
     /// The robot's final pose: x, y (m), heading (deg, CCW from +x).
     pub final_pose: (f64, f64, f64),
     /// The grid cell the robot ends in.
@@ -377,6 +382,7 @@ impl Report {
             self.localisation.heading_error_at_s
         );
         let _ = writeln!(s, "collisions      {}", self.collisions);
+        let _ = writeln!(s, "physics         {}", self.unphysical.describe());
         if let Some(c) = &self.first_contact {
             let cell = c.cell.map_or("off grid".to_string(), |(r, col)| format!("cell ({r}, {col})"));
             let belief = c.belief_error_m.map_or(String::new(), |e| format!(", Carto's belief {e:.3} m off"));
@@ -428,6 +434,9 @@ impl Report {
         );
         let _ = writeln!(s, "mission errors {:?}", r.mission_errors);
         let _ = writeln!(s, "moves {}, reconnects {}, collisions {}", r.moves, r.reconnects, r.collisions);
+        if r.unphysical.steps > 0 {
+            let _ = writeln!(s, "physics {}", r.unphysical.describe());
+        }
         let _ = writeln!(
             s,
             "coverage {}/{}, accuracy {}/{}",

@@ -18,6 +18,7 @@ use std::collections::BTreeSet;
 use rapier2d::parry::query::RayCast;
 use rapier2d::parry::shape::Compound;
 use rapier2d::prelude::*;
+use robot_model::kinematics::MecanumKinematics;
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
 
@@ -63,6 +64,61 @@ pub struct SimWorld {
     touching: BTreeSet<(u32, u32)>,
     collisions: u32,
     front_contact: bool,
+    speed_limit: SpeedLimit,
+    unphysical: Unphysical,
+    steps: u64,
+}
+
+/// The fastest the robot can move on its own wheels, with a margin: nothing else in the room
+/// moves and contacts do not bounce (restitution 0), so a body going faster was thrown by a fault
+/// of the simulation, not by anything physical.
+#[derive(Debug, Clone, Copy)]
+struct SpeedLimit {
+    /// m/s.
+    linear: f32,
+    /// rad/s.
+    angular: f32,
+}
+
+impl SpeedLimit {
+    /// A quarter above the top speed and turn rate of `profile`'s wheels. A robot hitting a
+    /// corner at top speed turns at most ~5 rad/s (the impulse at a corner of its box), below
+    /// the 7.9 rad/s this gives the default robot.
+    fn of(profile: &RobotProfile) -> SpeedLimit {
+        let kinematics = MecanumKinematics::from_profile(profile);
+        let top = kinematics.max_rim_speed();
+        SpeedLimit { linear: 1.25 * top, angular: 1.25 * top / kinematics.rotation_arm().max(1e-3) }
+    }
+}
+
+impl Unphysical {
+    /// One line for a report: "sound" with the fastest speeds, or when and how often the body
+    /// went faster than its wheels can drive it.
+    pub fn describe(&self) -> String {
+        let fastest = format!("fastest {:.2} m/s, {:.1} rad/s", self.fastest_m_s, self.fastest_rad_s);
+        match self.first_at_s {
+            None => format!("sound ({fastest})"),
+            Some(t) => format!(
+                "NOT PHYSICAL from {t:.2} s: the body moved faster than its wheels can drive it \
+                 ({} steps, {fastest})",
+                self.steps
+            ),
+        }
+    }
+}
+
+/// Steps after which the body moved faster than [`SpeedLimit`] allows (see
+/// [`SimWorld::unphysical`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Unphysical {
+    /// How many steps.
+    pub steps: u32,
+    /// Simulated time after the first such step, seconds (`None` when there was none).
+    pub first_at_s: Option<f64>,
+    /// The fastest body speed after any step, m/s.
+    pub fastest_m_s: f32,
+    /// The fastest body turn rate after any step, rad/s.
+    pub fastest_rad_s: f32,
 }
 
 impl SimWorld {
@@ -129,6 +185,9 @@ impl SimWorld {
             touching: BTreeSet::new(),
             collisions: 0,
             front_contact: false,
+            speed_limit: SpeedLimit::of(profile),
+            unphysical: Unphysical::default(),
+            steps: 0,
         };
         // A zero-length step builds the broad phase and the contact graph before the first real
         // step (kept because the recorded runs and snapshots start from that state).
@@ -156,6 +215,28 @@ impl SimWorld {
             &(),
         );
         self.update_contacts();
+        if self.params.dt > 0.0 {
+            self.steps += 1;
+            self.check_speed();
+        }
+    }
+
+    fn check_speed(&mut self) {
+        let Some(body) = self.bodies.get(self.robot) else {
+            return;
+        };
+        let (speed, turn) = (body.linvel().length(), body.angvel().abs());
+        let at = body.translation();
+        let u = &mut self.unphysical;
+        u.fastest_m_s = u.fastest_m_s.max(speed);
+        u.fastest_rad_s = u.fastest_rad_s.max(turn);
+        if speed > self.speed_limit.linear || turn > self.speed_limit.angular {
+            u.steps += 1;
+            if u.first_at_s.is_none() {
+                u.first_at_s = Some(self.steps as f64 * f64::from(self.params.dt));
+                tracing::warn!(speed, turn, ?at, "the body moved faster than its wheels can drive it");
+            }
+        }
     }
 
     fn update_contacts(&mut self) {
@@ -236,10 +317,14 @@ impl SimWorld {
         }
     }
 
-    /// Clears the forces of the previous step.
+    /// Clears the forces and torques of the previous step. Rapier keeps both until they are
+    /// reset, and a force off the centre of mass adds a torque: when only the forces were cleared
+    /// the wheels' torques summed over the whole run, and a robot jammed while turning was thrown
+    /// across the room at 20 m/s after a few seconds (40 of 200 generated rooms).
     pub fn reset_robot_forces(&mut self) {
         if let Some(b) = self.bodies.get_mut(self.robot) {
             b.reset_forces(true);
+            b.reset_torques(true);
         }
     }
 
@@ -259,6 +344,13 @@ impl SimWorld {
         // Angle between the reversed ray and the surface normal.
         let cos = -(dir.0 * hit.normal.x + dir.1 * hit.normal.y);
         Some(RayHit { distance: hit.time_of_impact, incidence: cos.abs().clamp(0.0, 1.0).acos() })
+    }
+
+    /// The steps after which the robot moved faster than its wheels can drive it. None should
+    /// ever happen; a run with one did something unphysical from then on, and its report says so
+    /// (`sim/README.md`, "Contacts").
+    pub fn unphysical(&self) -> Unphysical {
+        self.unphysical
     }
 
     /// How many times the robot has started touching something.

@@ -11,6 +11,7 @@ use robot_model::time::{Duration, Instant};
 use sha2::{Digest, Sha256};
 use sim::body::RobotBody;
 use sim::scenario::Scenario;
+use sim::world::SimWorld;
 
 const DT: Duration = Duration::from_millis(5);
 
@@ -55,6 +56,7 @@ fn forward_full_speed_for_two_seconds_matches_wheel_speed_time_and_motor_lag() {
     let moved = body.pose().x + 3.0;
     assert!((moved - predicted).abs() / predicted < 0.05, "moved {moved:.3} m, predicted {predicted:.3} m");
     assert!(body.pose().y.abs() < 0.01 && body.pose().theta.abs() < 0.01, "{:?}", body.pose());
+    assert_eq!(body.world().unphysical().steps, 0, "top speed counted as unphysical");
 }
 
 #[test]
@@ -296,4 +298,81 @@ fn issue_16_sonar_rays_end_at_the_wall_they_hit() {
         }
     }
     assert!(hits > rays / 2 && lost > 0, "{rays} rays, {hits} hits, {lost} lost to incidence");
+}
+
+/// The robot facing south between a 0.183 m floor lamp and a 1 m box, `gap` metres either side
+/// of its 0.24 m width, told to spin at `omega` rad/s for 8 s: its diagonal (0.35 m) does not fit,
+/// so it jams. Returns the fastest the body moved between two steps (m/s), how far it ended from
+/// where it started (m), and the world's count of unphysical steps.
+fn spin_wedged(omega: f32, gap: f32) -> (f32, f32, u32) {
+    let p = quiet_profile();
+    let half_width = p.geometry.body_width_m / 2.0;
+    let s = room(&format!(
+        "Circle(center: ({}, 0.0), radius: 0.183), Box(center: ({}, 0.0), size: (1.0, 1.0))",
+        -(half_width + gap + 0.183),
+        half_width + gap + 0.5
+    ));
+    let start = Pose2::new(0.0, 0.0, -std::f32::consts::FRAC_PI_2);
+    let mut body = RobotBody::new(&s, &p, start, DT);
+    let sp = setpoints(&p, Twist { vx: 0.0, vy: 0.0, omega });
+    let mut fastest = 0.0f32;
+    let mut last = body.pose();
+    for _ in 0..1600 {
+        body.step(sp);
+        let now = body.pose();
+        fastest = fastest.max((now.x - last.x).hypot(now.y - last.y) / DT.as_secs_f32());
+        last = now;
+    }
+    (fastest, last.x.hypot(last.y), body.world().unphysical().steps)
+}
+
+#[test]
+fn a_robot_spinning_wedged_between_a_lamp_and_a_box_stays_jammed() {
+    // Generated irregular seed 2: until the drive's torques were cleared every step (rapier keeps
+    // a torque until `reset_torques`), the wheels' torque added up while the robot was jammed
+    // and after 4–5 s the body was thrown across the room at about 20 m/s.
+    for omega in [0.5, 3.0] {
+        for gap in [0.002, 0.01] {
+            let (fastest, moved, unphysical) = spin_wedged(omega, gap);
+            assert!(fastest < 0.3, "turn {omega} rad/s, gap {gap} m: moved at {fastest:.2} m/s");
+            assert!(moved < 0.03, "turn {omega} rad/s, gap {gap} m: ended {moved:.3} m away");
+            assert_eq!(unphysical, 0, "turn {omega} rad/s, gap {gap} m");
+        }
+    }
+}
+
+#[test]
+fn a_force_off_the_centre_turns_the_body_for_its_own_step_only() {
+    let p = quiet_profile();
+    let mut world = SimWorld::new(&room(""), &p, Pose2::new(0.0, 0.0, 0.0), DT.as_secs_f32());
+    // One step pushed sideways at the front starts the body turning.
+    world.reset_robot_forces();
+    world.add_robot_force(0.1, 0.0, 0.0, 1.0);
+    world.step();
+    assert!(world.robot_pose().theta > 0.0, "the push did not turn the body");
+    // Then nothing pushes: the body turns on at the rate the push gave it, no faster.
+    let mut turned = Vec::new();
+    for _ in 0..3 {
+        let before = world.robot_pose().theta;
+        world.reset_robot_forces();
+        world.step();
+        turned.push(world.robot_pose().theta - before);
+    }
+    assert!(turned.iter().all(|t| (t - turned[0]).abs() < 1e-7), "turned per step: {turned:?}");
+}
+
+#[test]
+fn a_body_pushed_faster_than_its_wheels_drive_it_is_reported_unphysical() {
+    let p = quiet_profile();
+    let mut world = SimWorld::new(&room(""), &p, Pose2::new(0.0, 0.0, 0.0), DT.as_secs_f32());
+    for _ in 0..20 {
+        world.reset_robot_forces();
+        world.add_robot_force(0.0, 0.0, 100.0, 0.0);
+        world.step();
+    }
+    let u = world.unphysical();
+    // 100 N on 1.6 kg for 0.1 s: 6.25 m/s, past the default robot's 1.25 × 1.2 m/s from step 4.
+    assert!(u.steps >= 15, "{u:?}");
+    assert!(u.first_at_s.is_some_and(|t| (0.015..0.03).contains(&t)), "{u:?}");
+    assert!(u.fastest_m_s > 6.0, "{u:?}");
 }

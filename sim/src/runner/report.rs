@@ -38,6 +38,7 @@ impl Lockstep {
             moves: cute.counters().moves_sent,
             collisions: self.twin.body().world().collisions(),
             first_contact: self.first_contact.clone(),
+            unphysical: self.twin.body().world().unphysical(),
             final_pose: (f64::from(pose.x), f64::from(pose.y), f64::from(pose.theta.to_degrees())),
             final_cell: self.truth.frame.cell_at(pose.x, pose.y),
             cute_cell: (cx, cy),

@@ -14,6 +14,7 @@ use super::SweepError;
 use super::exec::Verdict;
 use super::plan::{Manifest, generated_room, group_of, rerun_command};
 use crate::report::{ContactCause, FirstContact};
+use crate::world::Unphysical;
 
 /// Most runs listed by name in `summary.md`'s failure tables.
 const MAX_LISTED: usize = 50;
@@ -49,6 +50,10 @@ pub struct RunRecord {
     /// The run's first contact, if any.
     #[serde(default)]
     pub first_contact: Option<FirstContact>,
+    /// Whether and when the body moved faster than its wheels can drive it (absent in results
+    /// of older binaries).
+    #[serde(default)]
+    pub unphysical: Option<Unphysical>,
 }
 
 /// One expectation of a run, as `report.json` has it.
@@ -204,6 +209,7 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
         );
     }
     first_contacts(&mut s, records);
+    thrown(&mut s, records);
     let mut worst: Vec<&RunRecord> = records.iter().filter(|r| !r.verdict.passed()).collect();
     worst.sort_by(|a, b| {
         (a.verdict, std::cmp::Reverse(a.failed_checks()))
@@ -284,6 +290,34 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
         }
         let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which.join(", ")));
     }
+}
+
+/// The "Not physical" list: runs in which the body moved faster than its wheels can drive it
+/// (`sim/README.md`, "Contacts"). Nothing when there is none.
+fn thrown(s: &mut String, records: &[RunRecord]) {
+    let runs: Vec<(&RunRecord, f64)> =
+        records.iter().filter_map(|r| Some((r, r.unphysical.as_ref()?.first_at_s?))).collect();
+    if runs.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n## Not physical\n");
+    let _ = writeln!(
+        s,
+        "In {} of {} runs the robot's body moved faster than its wheels can drive it: a fault of \
+         the twin's physics (`sim/README.md`, \"Contacts\"). What those runs did after that time \
+         is not what the robot would do:\n",
+        runs.len(),
+        records.len()
+    );
+    let mut which: Vec<String> = runs
+        .iter()
+        .take(MAX_LISTED)
+        .map(|(r, t)| format!("{} {} ({t:.1} s)", short_room(&r.room), r.room_label()))
+        .collect();
+    if runs.len() > MAX_LISTED {
+        which.push(format!("…and {} more", runs.len() - MAX_LISTED));
+    }
+    let _ = writeln!(s, "{}", which.join(", "));
 }
 
 /// A room id without the file's folders or the generator's seed (the label has it).
@@ -442,6 +476,30 @@ mod tests {
         let mut none = String::new();
         first_contacts(&mut none, &[line(0, "gen:flat:3", None)]);
         assert!(none.is_empty());
+    }
+
+    #[test]
+    fn runs_that_left_physics_are_listed_with_the_time() {
+        let line = |i: usize, room: &str, unphysical: &str| {
+            RunRecord::parse(
+                &format!(
+                    r#"{{"index":{i},"room":"{room}","scenario":"s","seed":{i},"verdict":"fail"{unphysical}}}"#
+                ),
+                "t",
+            )
+            .unwrap()
+        };
+        let fast = r#","unphysical":{"steps":12,"first_at_s":25.6,"fastest_m_s":14.0,"fastest_rad_s":157.0}"#;
+        let sound = r#","unphysical":{"steps":0,"first_at_s":null,"fastest_m_s":0.3,"fastest_rad_s":2.0}"#;
+        let records =
+            [line(0, "gen:irregular:2", fast), line(1, "gen:flat:1", sound), line(2, "old.ron", "")];
+        let mut s = String::new();
+        thrown(&mut s, &records);
+        assert!(s.contains("In 1 of 3 runs the robot's body moved faster"), "{s}");
+        assert!(s.contains("irregular room 2 seed 0 (25.6 s)"), "{s}");
+        let mut none = String::new();
+        thrown(&mut none, &records[1..]);
+        assert!(none.is_empty(), "{none}");
     }
 
     #[test]
