@@ -287,10 +287,7 @@ impl Pilot {
         sensors: &SensorState,
         why: &str,
     ) {
-        let radius = self.safety.turn_clear_m;
-        let clear = self
-            .believed(motor, sensors)
-            .is_none_or(|r| self.surroundings.inside_circle(r, radius).is_none());
+        let clear = self.believed(motor, sensors).is_none_or(|r| self.echo_in_turning_circle(r).is_none());
         if clear {
             tracing::info!(why, "shift before a turn ended off target, but the turning circle is clear");
             self.start_turn(now, mv, motor, sensors);
@@ -298,6 +295,15 @@ impl Pilot {
             self.counters.turns_refused += 1;
             self.fail(now, &format!("turn refused: the shift before it failed ({why})"));
         }
+    }
+
+    /// The first known echo (ahead, left of the body, metres) inside the circle the body sweeps
+    /// turning at `robot`, after forgetting the echoes under the body: it stands there, so they
+    /// came from a wrong pose. Both turn checks ask this.
+    fn echo_in_turning_circle(&mut self, robot: Pose2) -> Option<(f64, f64)> {
+        let s = self.safety;
+        self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
+        self.surroundings.inside_circle(robot, s.turn_clear_m)
     }
 
     /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
@@ -308,8 +314,7 @@ impl Pilot {
             Some(robot) if s.safe_turns => robot,
             _ => return self.start_turn(now, mv, motor, sensors),
         };
-        self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
-        let Some(hit) = self.surroundings.inside_circle(robot, radius) else {
+        let Some(hit) = self.echo_in_turning_circle(robot) else {
             return self.start_turn(now, mv, motor, sensors);
         };
         let max_m = 0.25 * s.cell_m;
