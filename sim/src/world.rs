@@ -12,13 +12,16 @@
 //!
 //! Collisions are counted as *contact starts*: each time the robot begins touching a wall or an
 //! obstacle it was not touching in the previous step, the count goes up by one.
+//!
+//! The speed guard: after every step the world checks that the body moves no faster than its
+//! wheels can drive it ([`SimWorld::unphysical`]).
 
 use std::collections::BTreeSet;
 
 use rapier2d::parry::query::RayCast;
 use rapier2d::parry::shape::Compound;
 use rapier2d::prelude::*;
-use robot_model::kinematics::MecanumKinematics;
+use robot_model::kinematics::{MecanumKinematics, rpm_to_rad_s};
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
 
@@ -81,33 +84,25 @@ struct SpeedLimit {
 }
 
 impl SpeedLimit {
-    /// A quarter above the top speed and turn rate of `profile`'s wheels. A robot hitting a
-    /// corner at top speed turns at most ~5 rad/s (the impulse at a corner of its box), below
-    /// the 7.9 rad/s this gives the default robot.
+    /// A quarter above the fastest body speed and turn rate that any mix of full-speed wheels
+    /// gives through the profile's kinematics (strafing beats driving forward when the rollers
+    /// sit below 45°): about 1.5 m/s and 8.1 rad/s for the default robot. Driving into a box's
+    /// corner 10 cm off the centre line at top speed turns it at 5.6 rad/s (`tests/physics.rs`).
     fn of(profile: &RobotProfile) -> SpeedLimit {
         let kinematics = MecanumKinematics::from_profile(profile);
-        let top = kinematics.max_rim_speed();
-        SpeedLimit { linear: 1.25 * top, angular: 1.25 * top / kinematics.rotation_arm().max(1e-3) }
-    }
-}
-
-impl Unphysical {
-    /// One line for a report: "sound" with the fastest speeds, or when and how often the body
-    /// went faster than its wheels can drive it.
-    pub fn describe(&self) -> String {
-        let fastest = format!("fastest {:.2} m/s, {:.1} rad/s", self.fastest_m_s, self.fastest_rad_s);
-        match self.first_at_s {
-            None => format!("sound ({fastest})"),
-            Some(t) => format!(
-                "NOT PHYSICAL from {t:.2} s: the body moved faster than its wheels can drive it \
-                 ({} steps, {fastest})",
-                self.steps
-            ),
+        let full = rpm_to_rad_s(profile.motor.max_wheel_rpm);
+        let (mut linear, mut angular) = (0.0f32, 0.0f32);
+        for signs in 0..16u32 {
+            let wheels = std::array::from_fn(|i| if signs >> i & 1 == 1 { full } else { -full });
+            let twist = kinematics.forward(wheels);
+            linear = linear.max(twist.vx.hypot(twist.vy));
+            angular = angular.max(twist.omega.abs());
         }
+        SpeedLimit { linear: 1.25 * linear, angular: 1.25 * angular }
     }
 }
 
-/// Steps after which the body moved faster than [`SpeedLimit`] allows (see
+/// Steps after which the body moved faster than its wheels can drive it (see
 /// [`SimWorld::unphysical`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Unphysical {
@@ -119,6 +114,22 @@ pub struct Unphysical {
     pub fastest_m_s: f32,
     /// The fastest body turn rate after any step, rad/s.
     pub fastest_rad_s: f32,
+}
+
+impl Unphysical {
+    /// One line for a report: "sound" with the fastest speeds, or when and how often the body
+    /// went faster than its wheels can drive it.
+    pub fn describe(&self) -> String {
+        let fastest = format!("fastest {:.2} m/s, {:.1} rad/s", self.fastest_m_s, self.fastest_rad_s);
+        match self.first_at_s {
+            None => format!("sound ({fastest})"),
+            Some(t) => format!(
+                "NOT PHYSICAL from {t:.3} s: the body moved faster than its wheels can drive it \
+                 ({} steps, {fastest})",
+                self.steps
+            ),
+        }
+    }
 }
 
 impl SimWorld {
@@ -226,14 +237,16 @@ impl SimWorld {
             return;
         };
         let (speed, turn) = (body.linvel().length(), body.angvel().abs());
-        let at = body.translation();
         let u = &mut self.unphysical;
         u.fastest_m_s = u.fastest_m_s.max(speed);
         u.fastest_rad_s = u.fastest_rad_s.max(turn);
         if speed > self.speed_limit.linear || turn > self.speed_limit.angular {
             u.steps += 1;
             if u.first_at_s.is_none() {
-                u.first_at_s = Some(self.steps as f64 * f64::from(self.params.dt));
+                // Whole microseconds: the f32 step would give 0.0249999994 s for 0.025 s.
+                let at_s = self.steps as f64 * f64::from(self.params.dt);
+                u.first_at_s = Some((at_s * 1e6).round() / 1e6);
+                let at = body.translation();
                 tracing::warn!(speed, turn, ?at, "the body moved faster than its wheels can drive it");
             }
         }

@@ -371,8 +371,34 @@ fn a_body_pushed_faster_than_its_wheels_drive_it_is_reported_unphysical() {
         world.step();
     }
     let u = world.unphysical();
-    // 100 N on 1.6 kg for 0.1 s: 6.25 m/s, past the default robot's 1.25 × 1.2 m/s from step 4.
-    assert!(u.steps >= 15, "{u:?}");
-    assert!(u.first_at_s.is_some_and(|t| (0.015..0.03).contains(&t)), "{u:?}");
+    // 100 N on 1.6 kg: 0.3125 m/s more per step, past the default robot's 1.25 × 1.225 m/s
+    // after step 5; 6.25 m/s after 20.
+    assert_eq!((u.steps, u.first_at_s), (16, Some(0.025)), "{u:?}");
     assert!(u.fastest_m_s > 6.0, "{u:?}");
+}
+
+#[test]
+fn strafing_at_full_wheel_speed_on_30_degree_rollers_is_physical() {
+    // Below 45° the rollers make strafing faster than the wheels' rim speed (÷ tan 30°).
+    let mut p = quiet_profile();
+    p.wheels.roller_angle_deg = 30.0;
+    let mut body = RobotBody::new(&room(""), &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let full = p.motor.max_wheel_rpm;
+    drive(&mut body, [-full, full, full, -full], 2.0);
+    let u = body.world().unphysical();
+    assert!(u.fastest_m_s > 1.6, "strafed at only {:.2} m/s", u.fastest_m_s);
+    assert_eq!(u.steps, 0, "{u:?}");
+}
+
+#[test]
+fn hitting_a_box_corner_at_top_speed_spins_the_body_but_is_physical() {
+    // The box's corner 10 cm left of the robot's centre line, 0.5 m ahead.
+    let p = quiet_profile();
+    let s = room("Box(center: (0.78, 0.35), size: (0.2, 0.5))");
+    let mut body = RobotBody::new(&s, &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    drive(&mut body, [p.motor.max_wheel_rpm; 4], 1.5);
+    let u = body.world().unphysical();
+    assert!(body.world().collisions() >= 1);
+    assert!(u.fastest_rad_s > 3.0, "turned at only {:.2} rad/s", u.fastest_rad_s);
+    assert_eq!(u.steps, 0, "{u:?}");
 }

@@ -297,9 +297,12 @@ impl Pilot {
         }
     }
 
-    /// The first known echo (ahead, left of the body, metres) inside the circle the body sweeps
+    /// The nearest known echo (ahead, left of the body, metres) inside the circle the body sweeps
     /// turning at `robot`, after forgetting the echoes under the body: it stands there, so they
-    /// came from a wrong pose. Both turn checks ask this.
+    /// came from a wrong pose. Both turn checks ask this. After a shift that ended off target the
+    /// believed pose is the least sure, and an echo it puts under the body is forgotten all the
+    /// same: a reading at rest would forget it too, and keeping it would refuse every turn from
+    /// there (warehouse seed 19 of the generated rooms, before the footprint was cleared).
     fn echo_in_turning_circle(&mut self, robot: Pose2) -> Option<(f64, f64)> {
         let s = self.safety;
         self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);

@@ -201,10 +201,6 @@ fn fail_reason(report: &crate::report::Report) -> String {
     if !report.mission_complete {
         parts.push(format!("mission not complete at the time limit ({:.0} s)", report.sim_time_s));
     }
-    if let Some(t) = report.unphysical.first_at_s {
-        parts
-            .push(format!("not physical from {t:.1} s (the body moved faster than its wheels can drive it)"));
-    }
     parts.join("; ")
 }
 

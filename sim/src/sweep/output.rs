@@ -209,7 +209,7 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
         );
     }
     first_contacts(&mut s, records);
-    thrown(&mut s, records);
+    not_physical_runs(&mut s, records);
     let mut worst: Vec<&RunRecord> = records.iter().filter(|r| !r.verdict.passed()).collect();
     worst.sort_by(|a, b| {
         (a.verdict, std::cmp::Reverse(a.failed_checks()))
@@ -294,7 +294,7 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
 
 /// The "Not physical" list: runs in which the body moved faster than its wheels can drive it
 /// (`sim/README.md`, "Contacts"). Nothing when there is none.
-fn thrown(s: &mut String, records: &[RunRecord]) {
+fn not_physical_runs(s: &mut String, records: &[RunRecord]) {
     let runs: Vec<(&RunRecord, f64)> =
         records.iter().filter_map(|r| Some((r, r.unphysical.as_ref()?.first_at_s?))).collect();
     if runs.is_empty() {
@@ -494,11 +494,11 @@ mod tests {
         let records =
             [line(0, "gen:irregular:2", fast), line(1, "gen:flat:1", sound), line(2, "old.ron", "")];
         let mut s = String::new();
-        thrown(&mut s, &records);
+        not_physical_runs(&mut s, &records);
         assert!(s.contains("In 1 of 3 runs the robot's body moved faster"), "{s}");
         assert!(s.contains("irregular room 2 seed 0 (25.6 s)"), "{s}");
         let mut none = String::new();
-        thrown(&mut none, &records[1..]);
+        not_physical_runs(&mut none, &records[1..]);
         assert!(none.is_empty(), "{none}");
     }
 
