@@ -21,7 +21,7 @@ use std::collections::BTreeSet;
 use rapier2d::parry::query::RayCast;
 use rapier2d::parry::shape::Compound;
 use rapier2d::prelude::*;
-use robot_model::kinematics::{MecanumKinematics, rpm_to_rad_s};
+use robot_model::kinematics::MecanumKinematics;
 use robot_model::pose::Pose2;
 use robot_model::profile::RobotProfile;
 
@@ -90,11 +90,11 @@ impl SpeedLimit {
     /// corner 10 cm off the centre line at top speed turns it at 5.6 rad/s (`tests/physics.rs`).
     fn of(profile: &RobotProfile) -> SpeedLimit {
         let kinematics = MecanumKinematics::from_profile(profile);
-        let full = rpm_to_rad_s(profile.motor.max_wheel_rpm);
+        let full = profile.motor.max_wheel_rpm;
         let (mut linear, mut angular) = (0.0f32, 0.0f32);
         for signs in 0..16u32 {
-            let wheels = std::array::from_fn(|i| if signs >> i & 1 == 1 { full } else { -full });
-            let twist = kinematics.forward(wheels);
+            let rpm = std::array::from_fn(|i| if signs >> i & 1 == 1 { full } else { -full });
+            let twist = kinematics.forward_rpm(rpm);
             linear = linear.max(twist.vx.hypot(twist.vy));
             angular = angular.max(twist.omega.abs());
         }

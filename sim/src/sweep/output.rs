@@ -280,15 +280,8 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
     let _ = writeln!(s, "| first contact | runs | which |");
     let _ = writeln!(s, "|---|---:|---|");
     for (cause, runs) in &by_cause {
-        let mut which: Vec<String> = runs
-            .iter()
-            .take(MAX_LISTED)
-            .map(|r| format!("{} {}", short_room(&r.room), r.room_label()))
-            .collect();
-        if runs.len() > MAX_LISTED {
-            which.push(format!("…and {} more", runs.len() - MAX_LISTED));
-        }
-        let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which.join(", ")));
+        let which = capped_list(runs, |r| format!("{} {}", short_room(&r.room), r.room_label()));
+        let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which));
     }
 }
 
@@ -309,15 +302,18 @@ fn not_physical_runs(s: &mut String, records: &[RunRecord]) {
         runs.len(),
         records.len()
     );
-    let mut which: Vec<String> = runs
-        .iter()
-        .take(MAX_LISTED)
-        .map(|(r, t)| format!("{} {} ({t:.1} s)", short_room(&r.room), r.room_label()))
-        .collect();
-    if runs.len() > MAX_LISTED {
-        which.push(format!("…and {} more", runs.len() - MAX_LISTED));
+    let which = capped_list(&runs, |(r, t)| format!("{} {} ({t:.1} s)", short_room(&r.room), r.room_label()));
+    let _ = writeln!(s, "{which}");
+}
+
+/// The first [`MAX_LISTED`] of `items` as `label` names them, joined with commas, and how many
+/// more there are.
+fn capped_list<T>(items: &[T], label: impl Fn(&T) -> String) -> String {
+    let mut which: Vec<String> = items.iter().take(MAX_LISTED).map(label).collect();
+    if items.len() > MAX_LISTED {
+        which.push(format!("…and {} more", items.len() - MAX_LISTED));
     }
-    let _ = writeln!(s, "{}", which.join(", "));
+    which.join(", ")
 }
 
 /// A room id without the file's folders or the generator's seed (the label has it).
