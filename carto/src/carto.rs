@@ -76,6 +76,8 @@ pub struct CartoStats {
     pub turns_shifted: u64,
     /// Turns refused: no shift cleared the known echoes.
     pub turns_refused: u64,
+    /// Turns that failed (jammed, timed out) and were turned back to their start heading.
+    pub turns_undone: u64,
     /// Along-track fixes against a wall seen before.
     pub wall_fixes: u64,
     /// Times the sensor board was declared lost.
@@ -463,6 +465,7 @@ impl Carto {
             corridor_blocked: p.corridor_blocked,
             turns_shifted: p.turns_shifted,
             turns_refused: p.turns_refused,
+            turns_undone: p.turns_undone,
             wall_fixes: p.wall_fixes,
             ..self.stats
         }

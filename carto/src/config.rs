@@ -122,6 +122,10 @@ pub struct CartoConfig {
     pub max_corrections: u8,
     /// A move that has not finished after this long is stopped and fails.
     pub move_timeout: Duration,
+    /// A turn whose heading has not come [`crate::motor::JAM_PROGRESS_DEG`] closer to its target
+    /// for this long is jammed: it stops and fails (then Carto turns back), instead of pushing
+    /// whatever blocks the body until [`CartoConfig::move_timeout`].
+    pub jam_after: Duration,
     /// A reading older than this is stale: a move cannot start, a running move stops and fails.
     pub sensor_stale_after: Duration,
     /// Time constant of the IMU drift estimate against the wheels' heading, seconds (0 = off).
@@ -220,6 +224,7 @@ impl Default for CartoConfig {
             settle_time: Duration::from_millis(200),
             max_corrections: 4,
             move_timeout: Duration::from_secs(8),
+            jam_after: Duration::from_millis(750),
             sensor_stale_after: Duration::from_millis(600),
             imu_drift_tau_s: 2.0,
             imu_drift_max_deg_per_min: 3.0,

@@ -27,6 +27,11 @@
 //! translation while turning, so coasting during a turn would be lost and the next FORWARD would
 //! correct its track for the wrong offset.
 //!
+//! A turn whose remaining angle has not shrunk by [`JAM_PROGRESS_DEG`] for
+//! [`CartoConfig::jam_after`] is jammed against something and fails at once
+//! ([`MoveError::Jammed`]); [`Motor::start_turn_back`] then turns the body back to the reference
+//! the turn started from.
+//!
 //! Turns and the heading hold aim at a *reference yaw* that moves by exactly 90° per successful
 //! turn, so turn errors do not accumulate; it is learnt from the IMU on the first move and re-learnt
 //! when the IMU disagrees with it by more than 20° (robot pushed, a failed turn).
@@ -114,6 +119,17 @@ pub enum MoveError {
     /// A return move was asked with no FORWARD to return from.
     #[error("no forward move to return from")]
     NothingToReturnFrom,
+    /// A turn stopped coming closer to its target: the body is jammed against something.
+    #[error("turn jammed: no progress for {after_ms} ms, {left_deg:.1} deg short of the target")]
+    Jammed {
+        /// How long the heading did not come closer, milliseconds.
+        after_ms: u64,
+        /// Degrees still to turn.
+        left_deg: f64,
+    },
+    /// A turn back was asked with no failed turn to undo.
+    #[error("no failed turn to undo")]
+    NothingToTurnBack,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -160,7 +176,13 @@ struct Move {
     /// The lateral offset from the cell's centre the move holds and ends on, metres (0: the
     /// track through the centres; a shift before a turn, [`Motor::start_shift`], sets another).
     track_left_m: f64,
+    /// A turn's last progress: when its remaining angle last shrank by [`JAM_PROGRESS_DEG`], and
+    /// that remaining angle (reset whenever an Active phase starts).
+    progress: Option<(Instant, f64)>,
 }
+
+/// A turn must come this much closer to its target every [`CartoConfig::jam_after`], degrees.
+pub const JAM_PROGRESS_DEG: f64 = 1.0;
 
 /// How long after a turn the IMU drift estimate still waits (the body settles), see
 /// [`Motor::is_turning`].
@@ -179,6 +201,7 @@ impl Move {
             first_stop_err: None,
             look: false,
             track_left_m: 0.0,
+            progress: None,
         }
     }
 }
@@ -200,6 +223,9 @@ pub struct Motor {
     turn_ended: Option<Instant>,
     /// When the command last went from moving to zero.
     zeroed_at: Option<Instant>,
+    /// The reference heading a turn started from, while that turn runs or after it failed
+    /// ([`Motor::start_turn_back`]).
+    turn_from_deg: Option<f64>,
 }
 
 impl Motor {
@@ -218,6 +244,7 @@ impl Motor {
             coast_bias_m: 0.0,
             turn_ended: None,
             zeroed_at: None,
+            turn_from_deg: None,
         }
     }
 
@@ -342,7 +369,21 @@ impl Motor {
     pub fn start_turn(&mut self, now: Instant, clockwise: bool, s: &SensorState) -> Result<(), MoveError> {
         let reference = self.hold_reference(now, s)?;
         let target_deg = if clockwise { reference - 90.0 } else { reference + 90.0 };
+        self.turn_from_deg = Some(reference);
         self.begin(now, Goal::Yaw { target_deg }, None, 0.0, s);
+        Ok(())
+    }
+
+    /// Undoes a turn that failed (jammed, timed out): turns back to the grid heading it started
+    /// from, which becomes the reference again when the turn back succeeds. The way back is the
+    /// way the body just came, so it is free unless the body was pushed. Only once per failed
+    /// turn.
+    pub fn start_turn_back(&mut self, now: Instant, s: &SensorState) -> Result<(), MoveError> {
+        let from = self.turn_from_deg.take().ok_or(MoveError::NothingToTurnBack)?;
+        self.fresh_yaw(now, s)?;
+        self.reference_deg = Some(from);
+        self.odo.set_frame(from);
+        self.begin(now, Goal::Yaw { target_deg: from }, None, 0.0, s);
         Ok(())
     }
 
@@ -430,6 +471,7 @@ impl Motor {
                     if let (Ok(()), Goal::Yaw { target_deg }, false) = (&result, m.goal, m.look) {
                         self.reference_deg = Some(target_deg);
                         self.odo.set_frame(target_deg);
+                        self.turn_from_deg = None;
                     }
                     if result.is_ok() && m.advance_m != 0.0 {
                         self.odo.advance(m.advance_m);

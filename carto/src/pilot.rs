@@ -21,6 +21,10 @@
 //!   is skipped; both are logged.
 //! - `STOP_ROBOT` stops the motors now and drops every pending command and partial batch; no reply.
 //! - Tasks queue in arrival order; a new request never interrupts a running task (only STOP does).
+//! - A turn that fails — jammed (the IMU shows no progress for [`CartoConfig::jam_after`]) or
+//!   timed out — is turned back to the grid heading it started from before `MOVE_DONE`, so the
+//!   body faces the heading Carto still stores (Cute learns from the next FORWARD's reply that
+//!   the turn was not made).
 //! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
@@ -151,6 +155,9 @@ pub struct PilotCounters {
     pub turns_refused: u64,
     /// Along-track fixes against a wall seen before (`walls.rs`).
     pub wall_fixes: u64,
+    /// Turns that failed (jammed, timed out) and were turned back to the heading they started
+    /// from.
+    pub turns_undone: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -184,6 +191,8 @@ enum Stage {
     Reading { look: usize, since: Instant },
     /// Driving back or forth before the turn `mv`, so the turning body clears known echoes.
     Shifting { mv: Move },
+    /// The turn `mv` failed: turning back to the heading it started from.
+    TurningBack { mv: Move },
 }
 
 /// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
@@ -209,13 +218,18 @@ pub enum Activity {
     ScanReading,
     /// Driving back or forth before a turn so the turning body clears known echoes.
     ShiftingBeforeTurn,
+    /// Turning back to the grid heading after a turn that failed.
+    TurningBack,
 }
 
 impl Activity {
     /// The motion in progress rotates the body on the spot (a turn or a scan look) or shifts it
     /// before a turn.
     pub fn is_turning(self) -> bool {
-        matches!(self, Activity::Turning | Activity::ScanLook | Activity::ShiftingBeforeTurn)
+        matches!(
+            self,
+            Activity::Turning | Activity::ScanLook | Activity::ShiftingBeforeTurn | Activity::TurningBack
+        )
     }
 
     /// In words.
@@ -231,6 +245,7 @@ impl Activity {
             Activity::ScanLook => "turning to look (scan)",
             Activity::ScanReading => "reading the sonar (scan)",
             Activity::ShiftingBeforeTurn => "shifting before a turn",
+            Activity::TurningBack => "turning back after a failed turn",
         }
     }
 }
@@ -300,6 +315,7 @@ impl Pilot {
             Stage::Looking { .. } => Activity::ScanLook,
             Stage::Reading { .. } => Activity::ScanReading,
             Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
+            Stage::TurningBack { .. } => Activity::TurningBack,
         }
     }
 
@@ -569,7 +585,11 @@ impl Pilot {
                         Some(Err(e)) => {
                             tracing::warn!(error = %e, ?kind, "move failed: robot stopped");
                             self.counters.moves_failed += 1;
-                            self.end_task(now);
+                            if kind.is_turn() {
+                                self.turn_back(now, kind, motor, sensors);
+                            } else {
+                                self.end_task(now);
+                            }
                         }
                     }
                 }
@@ -590,6 +610,18 @@ impl Pilot {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.start_turn(now, mv, motor, sensors),
                     Some(Err(e)) => self.turn_after_failed_shift(now, mv, motor, sensors, &e.to_string()),
+                },
+                Stage::TurningBack { mv } => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    None | Some(Ok(())) => {
+                        tracing::info!(?mv, "turned back to the heading the failed turn started from");
+                        self.rest_since = now;
+                        self.end_task(now);
+                    }
+                    Some(Err(e)) => {
+                        tracing::warn!(error = %e, ?mv, "turning back after a failed turn failed too");
+                        self.end_task(now);
+                    }
                 },
                 Stage::BackingOff => match motor.take_outcome() {
                     None if motor.is_busy() => return,
@@ -628,6 +660,23 @@ impl Pilot {
         match self.pose.and_then(|p| p.ahead()) {
             Some((x, y)) => self.replies.push(Reply::Obstacle { x, y }),
             None => tracing::info!("obstacle ahead, but no robot position to report it against"),
+        }
+    }
+
+    /// A turn failed part way: the body faces between two grid headings while the stored pose
+    /// keeps the old one. Turning back makes them agree again (the next move then holds a grid
+    /// heading, not the angle the body jammed at); the task ends with `MOVE_DONE` after it. Cute
+    /// takes the turn as made and learns otherwise from the next FORWARD's reply.
+    fn turn_back(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        match motor.start_turn_back(now, sensors) {
+            Ok(()) => {
+                self.counters.turns_undone += 1;
+                self.stage = Stage::TurningBack { mv };
+            }
+            Err(e) => {
+                tracing::warn!(error = %e, ?mv, "cannot turn back after a failed turn");
+                self.end_task(now);
+            }
         }
     }
 

@@ -31,6 +31,21 @@ use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
 
+/// The heading four wheel counts give, degrees counter-clockwise from where the counts were zero:
+/// mecanum forward kinematics, (−FL + FR − RL + RR) / (4 · lever).
+fn wheel_yaw_of([fl, fr, rl, rr]: [f64; 4], cfg: &CartoConfig) -> f64 {
+    ((-fl + fr - rl + rr) / 4.0 / cfg.encoder_counts_per_metre() / cfg.rotation_lever_m()).to_degrees()
+}
+
+/// A gap between the IMU's and the wheels' headings this much larger than the drift estimate
+/// explains is slip (a collision turned the body under slipping wheels, or the counters were
+/// reset), not drift: the estimate is re-anchored instead of following it, degrees.
+pub const DRIFT_JUMP_DEG: f64 = 2.0;
+
+/// After such a jump the gap is taken as slip for this long more (the push that turned the body
+/// may go on), so the part of it below [`DRIFT_JUMP_DEG`] does not become drift either.
+pub const SLIP_HOLD: Duration = Duration::from_millis(2000);
+
 /// A value and the time it arrived.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Stamped<T> {
@@ -115,6 +130,9 @@ struct DriftEstimate {
     drift_deg: f64,
     /// Time of the IMU sample last used.
     last: Option<Instant>,
+    /// Until then the gap is slip (a push goes on after it was first seen): every sample
+    /// re-anchors.
+    slipping_until: Option<Instant>,
 }
 
 impl SensorState {
@@ -206,11 +224,21 @@ impl SensorState {
     /// zero: mecanum forward kinematics, (−FL + FR − RL + RR) / (4 · lever). `None` until all four
     /// wheels reported.
     pub fn wheel_yaw_deg(&self, cfg: &CartoConfig) -> Option<f64> {
-        let [fl, fr, rl, rr] = self.counts()?.value.map(f64::from);
-        Some(
-            ((-fl + fr - rl + rr) / 4.0 / cfg.encoder_counts_per_metre() / cfg.rotation_lever_m())
-                .to_degrees(),
-        )
+        Some(wheel_yaw_of(self.counts()?.value.map(f64::from), cfg))
+    }
+
+    /// Every wheel's count moved to time `at` (before or after its sample) at its rate as of
+    /// `now`, at most [`CartoConfig::max_extrapolation`] either way; `None` until all four
+    /// reported.
+    fn counts_at(&self, at: Instant, now: Instant, cfg: &CartoConfig) -> Option<[f64; 4]> {
+        let mut out = [0.0; 4];
+        let max = cfg.max_extrapolation.as_secs_f64();
+        for (i, e) in self.encoders.iter().enumerate() {
+            let e = (*e)?;
+            let dt = if at >= e.at { (at - e.at).as_secs_f64() } else { -(e.at - at).as_secs_f64() };
+            out[i] = f64::from(e.value) + self.wheel_rate_cps(i, now, cfg) * dt.clamp(-max, max);
+        }
+        Some(out)
     }
 
     /// Updates the IMU drift estimate (call every poll; a no-op unless a new IMU sample arrived).
@@ -220,16 +248,26 @@ impl SensorState {
     /// It is sampled only while the robot is not turning (both rates under 3°/s), low-pass
     /// filtered with [`CartoConfig::imu_drift_tau_s`], and the estimate moves at most
     /// [`CartoConfig::imu_drift_max_deg_per_min`], so wheel slip (a collision, a turn) can only
-    /// pull it slowly. A jump of more than 10° (counters reset) re-anchors it. No sample is taken
-    /// while `turning` (the controller drives a turn or a look, or one ended less than
-    /// [`crate::motor::SETTLE_AFTER_TURN`] ago): the rates alone let the ends of a turn through,
-    /// where the IMU's noise decides which samples pass and the estimate was pulled off by a few
-    /// tenths of a degree.
+    /// pull it slowly. A gap more than [`DRIFT_JUMP_DEG`] beyond the estimate is slip, not drift:
+    /// a collision turned the body under slipping wheels, or the counters were reset. It
+    /// re-anchors the estimate, and so does every sample for [`SLIP_HOLD`] after it (the push may
+    /// go on). The wheels' heading is taken at the IMU sample's time (each encoder's count moved
+    /// along at its rate), so encoders that report at different moments open no gap while
+    /// driving. No sample is taken while `turning` (the controller drives a turn or a look, or one
+    /// ended less than [`crate::motor::SETTLE_AFTER_TURN`] ago): the rates alone let the ends of
+    /// a turn through, where the IMU's noise decides which samples pass and the estimate was
+    /// pulled off by a few tenths of a degree.
     pub fn estimate_imu_drift(&mut self, now: Instant, cfg: &CartoConfig, turning: bool) {
         if cfg.imu_drift_tau_s <= 0.0 || turning {
             return;
         }
-        let (Some(y), Some(wheel)) = (self.yaw, self.wheel_yaw_deg(cfg)) else {
+        // The wheels' heading at the IMU sample's time: the four encoders report at different
+        // moments, and the raw counts of a robot driving at 0.36 m/s differ by a few centimetres
+        // between wheels, a few degrees of false heading.
+        let Some(y) = self.yaw else {
+            return;
+        };
+        let Some(wheel) = self.counts_at(y.at, now, cfg).map(|c| wheel_yaw_of(c, cfg)) else {
             return;
         };
         if self.drift.last.is_some_and(|t| y.at <= t) {
@@ -255,8 +293,12 @@ impl SensorState {
             return;
         };
         let seen = diff - anchor;
-        if (seen - self.drift.drift_deg).abs() > 10.0 {
-            tracing::warn!(seen, "imu and wheel headings jumped apart: drift estimate re-anchored");
+        let slipping = self.drift.slipping_until.is_some_and(|until| y.at < until);
+        if slipping || (seen - self.drift.drift_deg).abs() > DRIFT_JUMP_DEG {
+            if !slipping {
+                tracing::warn!(seen, "imu and wheel headings jumped apart: drift estimate re-anchored");
+                self.drift.slipping_until = Some(y.at + SLIP_HOLD);
+            }
             self.drift.anchor = Some(diff - self.drift.drift_deg);
             return;
         }
@@ -610,6 +652,57 @@ mod tests {
         }
         assert_eq!(turning.imu_drift_deg(), 0.0);
         assert!((still.imu_drift_deg() + 0.25).abs() < 0.03, "{}", still.imu_drift_deg());
+    }
+
+    #[test]
+    fn a_body_turned_slowly_under_slipping_wheels_is_slip_not_drift() {
+        // Generated flat seed 26 (issue 10): a robot pushed round by a leg turned 4° at under
+        // 3°/s while its wheels slipped; the estimate, which only knew 10° jumps, followed the
+        // gap at 3°/min and turned every later FORWARD off the grid by up to 6°.
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        let mut t = 0;
+        let mut step = |s: &mut SensorState, yaw: f64| {
+            feed(s, &cfg, ms(t), yaw, 0.0, false);
+            t += 100;
+        };
+        for _ in 0..50 {
+            step(&mut s, 0.0);
+        }
+        // 4° in 2 s (2°/s): every sample passes the rate check
+        for k in 1..=20 {
+            step(&mut s, 0.2 * f64::from(k));
+        }
+        // then 2 minutes of straight driving with the body really at 4°
+        for _ in 0..1200 {
+            step(&mut s, 4.0);
+        }
+        assert!(s.imu_drift_deg().abs() < 0.2, "estimate {:.2}° (the slip is 4°)", s.imu_drift_deg());
+        assert!((s.yaw_deg().unwrap().value - 4.0).abs() < 0.2, "{:?}", s.yaw_deg());
+    }
+
+    #[test]
+    fn encoders_sampled_at_different_times_do_not_look_like_a_turn() {
+        // Driving straight at 0.36 m/s with each encoder reporting 50 ms after the one before:
+        // the raw counts differ by 1.8 cm between wheels, 2–4° of false heading. The drift
+        // estimate takes the counts at the IMU sample's time, so it sees no gap.
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        let cps = 0.36 * cfg.encoder_counts_per_metre();
+        for k in 0..=600u64 {
+            let now = ms(k * 50);
+            let wheel = (k % 4) as usize;
+            let count = (cps * now.saturating_since(Instant::ZERO).as_secs_f64()).round() as i32;
+            s.ingest(now, SensorEvent::Encoder { wheel, count });
+            if k % 2 == 0 {
+                s.ingest(now, SensorEvent::Heading { cw_deg: 0.0 });
+                s.smooth_yaw(&cfg, false);
+                s.estimate_imu_drift(now, &cfg, false);
+            }
+        }
+        let raw = s.counts().map(|c| c.value).unwrap_or_default();
+        assert!(raw.iter().max() != raw.iter().min(), "the raw counts disagree: {raw:?}");
+        assert!(s.imu_drift_deg().abs() < 0.1, "estimate {:.3}°", s.imu_drift_deg());
     }
 
     #[test]

@@ -7,6 +7,7 @@ mod fake;
 use carto::CartoConfig;
 use fake::{Harness, POSE};
 use protocol::link::{Command, Direction, GuiMessage};
+use robot_model::grid::Heading;
 use robot_model::time::{Duration, Instant};
 
 fn cartography(command: Command) -> GuiMessage {
@@ -377,6 +378,35 @@ fn jammed_wheels_time_out_and_stop() {
     assert!(h.robot.drives.last().unwrap().1.is_stop());
     assert_eq!(h.carto.stats().moves_failed, 1);
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)));
+}
+
+#[test]
+fn a_turn_jammed_part_way_is_turned_back_before_its_move_done() {
+    let mut h = ready();
+    // a leg stops the body 20° into a RIGHT; the wheels keep turning
+    h.robot.yaw_min_deg = Some(-20.0);
+    let t = h.now;
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
+    // given up on the jam, well before the 8 s move timeout
+    let done = h.replies[0].0;
+    assert!(
+        done.saturating_since(t) < Duration::from_millis(4000),
+        "MOVE_DONE after {:?}",
+        done.saturating_since(t)
+    );
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::MoveDone]);
+    // back at the heading it started from, which Carto still stores
+    assert!(h.robot.yaw.to_degrees().abs() <= 3.0, "yaw {:.1}°", h.robot.yaw.to_degrees());
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(Heading::East));
+    assert_eq!((h.carto.stats().moves_failed, h.carto.stats().turns_undone), (1, 1));
+    // the next FORWARD holds EAST, not the angle the body jammed at
+    h.robot.yaw_min_deg = None;
+    h.robot.distance_cm = 200.0;
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(10_000, |h| h.move_done_count() == 2));
+    assert!(h.robot.y.abs() <= 0.02, "drove {:.3} m off the row", h.robot.y);
+    assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 6)));
 }
 
 #[test]

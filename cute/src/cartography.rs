@@ -22,10 +22,20 @@
 //! the robot then marks *every* unknown cell it cannot reach as unreachable at once (a closed
 //! pocket costs one flood, not one search per cell); they stay unknown (2) on the map.
 //!
+//! Turns not made: Carto answers a turn it refused or could not finish (jammed, turned back) with
+//! MOVE_DONE alone, as a turn it made. The next FORWARD's reply shows the heading the robot really
+//! has (a refused FORWARD after a turn, when the old heading faces the grid's edge, shows it too),
+//! and that turn from that cell and heading is remembered as failed: the cartographer turns the
+//! other way round there, drives out straight ahead when no turn is left (at most
+//! [`MAX_ESCAPES_PER_CELL`] times per cell), and otherwise gives the target up as unreachable, so
+//! a robot that cannot turn ends the sweep instead of asking the same turn until the time limit.
+//!
 //! Invariants: [`Cartographer::next_command`] returns `None` (done) only when every map cell is
-//! known or proven unreachable, so every cell reachable from the start has been visited. It
-//! never asks for a FORWARD into a cell the map shows as an obstacle or off the map. Each search
-//! or bump gains information, so the sweep always ends. The room's outer walls need not be
+//! known, proven unreachable, or given up because no turn towards it is left (above); with
+//! every turn made, every cell reachable from the start has been visited. It never asks for a
+//! FORWARD into a cell the map shows as an obstacle or off the map, nor a turn it has seen fail
+//! from the same cell and heading. Each search, bump or failed turn gains information, so the
+//! sweep always ends. The room's outer walls need not be
 //! known: cells outside the room are met as obstacles like any other.
 //!
 //! ```
@@ -122,6 +132,11 @@ pub struct CartoStats {
     /// Replies that showed the robot facing another way than believed (a turn Carto refused or
     /// did not finish): the heading was taken from the reply.
     pub heading_resyncs: u64,
+    /// Turns such a reply showed were not made, remembered so they are not asked again from the
+    /// same cell and heading.
+    pub turns_failed: u64,
+    /// FORWARDs sent only because no turn towards the planned cell was left in the robot's cell.
+    pub turn_escapes: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -153,7 +168,17 @@ pub struct Cartographer {
     stats: CartoStats,
     flood_seen: Vec<bool>,
     flood_stack: Vec<(u8, u8)>,
+    /// The last turn taken as made since the last FORWARD's reply.
+    unconfirmed_turn: Option<Move>,
+    /// Turns a reply showed were not made: (cell, heading before the turn, turn).
+    failed_turns: Vec<((u8, u8), Heading, Move)>,
+    /// FORWARDs sent from each cell because no turn was left there (`turn_escapes`), row-major.
+    escapes: Vec<u8>,
 }
+
+/// A cell where no turn towards the plan is left lets the robot out straight ahead at most this
+/// often; then the target is given up as unreachable (the robot would go back and forth).
+pub const MAX_ESCAPES_PER_CELL: u8 = 2;
 
 impl Cartographer {
     /// A cartographer for a `rows × cols` area, robot at `start` facing `heading`.
@@ -187,6 +212,9 @@ impl Cartographer {
             stats: CartoStats::default(),
             flood_seen: vec![false; rows * cols],
             flood_stack: Vec::new(),
+            unconfirmed_turn: None,
+            failed_turns: Vec::new(),
+            escapes: vec![0; rows * cols],
         })
     }
 
@@ -327,9 +355,21 @@ impl Cartographer {
             let Some(want) = Heading::between(self.pose, next) else {
                 continue;
             };
-            let cmd = match turns_between(self.heading, want).first() {
-                None => Move::Forward,
-                Some(turn) => *turn,
+            let cmd = match self.turn_towards(want) {
+                Some(cmd) => cmd,
+                None => match self.escape(map) {
+                    Some(cmd) => cmd,
+                    None => {
+                        warn!(
+                            cell = ?self.pose,
+                            heading = %self.heading,
+                            ?target,
+                            "no turn left in this cell and no way out ahead: target given up"
+                        );
+                        self.give_up(target);
+                        continue;
+                    }
+                },
             };
             self.pending = Some(cmd);
             self.stats.commands += 1;
@@ -343,6 +383,64 @@ impl Cartographer {
         warn!("cartography made no progress; stopping the sweep");
         self.done = true;
         None
+    }
+
+    /// The first command that turns the robot from its heading to `want` (FORWARD when it faces
+    /// it already): the shorter way round whose turns have not failed in this cell, RIGHT on a
+    /// tie (as [`turns_between`]); `None` when a failed turn bars both ways.
+    fn turn_towards(&self, want: Heading) -> Option<Move> {
+        if turns_between(self.heading, want).is_empty() {
+            return Some(Move::Forward);
+        }
+        let turns_needed = |dir: Move| {
+            let mut heading = self.heading;
+            let mut n = 0;
+            while heading != want {
+                if self.turn_failed(self.pose, heading, dir) {
+                    return None;
+                }
+                heading = heading.after(dir);
+                n += 1;
+            }
+            Some(n)
+        };
+        match (turns_needed(Move::Right), turns_needed(Move::Left)) {
+            (Some(r), Some(l)) if l < r => Some(Move::Left),
+            (Some(_), _) => Some(Move::Right),
+            (None, Some(_)) => Some(Move::Left),
+            (None, None) => None,
+        }
+    }
+
+    fn turn_failed(&self, cell: (u8, u8), heading: Heading, turn: Move) -> bool {
+        self.failed_turns.contains(&(cell, heading, turn))
+    }
+
+    /// No turn towards the plan is left here: FORWARD, if the cell ahead is not known blocked and
+    /// this cell has not let the robot out too often already.
+    fn escape(&mut self, map: &Map) -> Option<Move> {
+        let i = self.index(self.pose)?;
+        let ahead = self.heading.step(self.pose, self.rows, self.cols)?;
+        if self.classify(map, ahead) == Known::Blocked || self.escapes[i] >= MAX_ESCAPES_PER_CELL {
+            return None;
+        }
+        self.escapes[i] += 1;
+        self.stats.turn_escapes += 1;
+        self.plan.clear();
+        debug!(cell = ?self.pose, heading = %self.heading, "no turn left here: out straight ahead");
+        Some(Move::Forward)
+    }
+
+    /// Marks `target` unreachable: the robot cannot get there from where it is.
+    fn give_up(&mut self, target: (u8, u8)) {
+        if let Some(i) = self.index(target)
+            && !self.unreachable[i]
+        {
+            self.unreachable[i] = true;
+            self.stats.unreachable += 1;
+        }
+        self.target = None;
+        self.plan.clear();
     }
 
     /// A* from the robot to `target` over free (1) and unknown (`unknown_cost`) cells.
@@ -417,6 +515,13 @@ impl Cartographer {
                     "Carto's reply shows the robot facing another way (a turn not made); following it"
                 );
                 self.stats.heading_resyncs += 1;
+                // Carto turns a failed turn back, so the robot faces where that turn started.
+                if let Some(turn) = self.unconfirmed_turn
+                    && !self.turn_failed(self.pose, faced, turn)
+                {
+                    self.failed_turns.push((self.pose, faced, turn));
+                    self.stats.turns_failed += 1;
+                }
                 self.heading = faced;
                 self.plan.clear();
             }
@@ -429,7 +534,10 @@ impl Cartographer {
         let cmd = self.pending.take();
         match result {
             MoveResult::Turned => match cmd {
-                Some(c) if c.is_turn() => self.heading = self.heading.after(c),
+                Some(c) if c.is_turn() => {
+                    self.heading = self.heading.after(c);
+                    self.unconfirmed_turn = Some(c);
+                }
                 other => warn!(?other, "turn reported for a command that was not a turn"),
             },
             MoveResult::Moved { x, y } => {
@@ -439,6 +547,7 @@ impl Cartographer {
                     return;
                 }
                 self.follow_reply((x, y));
+                self.unconfirmed_turn = None;
                 let (px, py) = (usize::from(self.pose.0), usize::from(self.pose.1));
                 if map.at(self.pose).is_some_and(|v| !v.is_known_free()) {
                     let _ = map.set_free(px, py);
@@ -454,13 +563,34 @@ impl Cartographer {
             MoveResult::Blocked { x, y } => {
                 self.stats.bumps += 1;
                 self.follow_reply((x, y));
+                self.unconfirmed_turn = None;
                 if (x, y) != self.pose {
                     // Outside the map it cannot be written, and needs not be: it is never planned.
                     let _ = map.set_obstacle(usize::from(x), usize::from(y));
                 }
                 self.plan.clear();
             }
-            MoveResult::NotExecuted => {}
+            MoveResult::NotExecuted => {
+                // Carto refuses a FORWARD off the grid: after a turn taken as made, the likelier
+                // story is that the turn was not (it faces the edge it faced before).
+                if let (Some(Move::Forward), Some(turn)) = (cmd, self.unconfirmed_turn.take()) {
+                    let before = match turn {
+                        Move::Right => self.heading.left(),
+                        Move::Left => self.heading.right(),
+                        Move::Forward => self.heading,
+                    };
+                    if before.step(self.pose, self.rows, self.cols).is_none() {
+                        warn!(%before, "FORWARD refused after a turn, facing the grid's edge: the turn was not made");
+                        self.stats.heading_resyncs += 1;
+                        if !self.turn_failed(self.pose, before, turn) {
+                            self.failed_turns.push((self.pose, before, turn));
+                            self.stats.turns_failed += 1;
+                        }
+                        self.heading = before;
+                        self.plan.clear();
+                    }
+                }
+            }
         }
     }
 }
@@ -531,6 +661,63 @@ mod tests {
         assert_eq!(c.stats().heading_resyncs, 1);
         assert_eq!(map.at((1, 2)), Some(CellValue::Obstacle));
         assert_eq!(map.at((2, 1)), Some(CellValue::Unknown), "the cell south was not touched");
+    }
+
+    /// Generated flat seed 10 (issue 10): a RIGHT that jammed every time, asked again after every
+    /// resync until the room's time limit (208 times). A turn a reply showed not made is not
+    /// asked again from the same cell and heading: the robot turns the other way round.
+    #[test]
+    fn a_turn_shown_not_made_is_not_asked_again_from_the_same_cell_and_heading() {
+        let mut map = Map::new(3, 3).unwrap();
+        for x in 0..3 {
+            for y in 0..3 {
+                map.set_free(x, y).unwrap();
+            }
+        }
+        map.set_robot(1, 1).unwrap();
+        let mut c = Cartographer::new(3, 3, (1, 1), Heading::East).unwrap();
+        c.pending = Some(Move::Right);
+        c.on_result(&mut map, MoveResult::Turned);
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Blocked { x: 1, y: 2 });
+        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 1));
+        // only the cell south is left to map: three LEFTs instead of the RIGHT that failed
+        map.set(2, 1, CellValue::Unknown).unwrap();
+        for expected in [Heading::North, Heading::West, Heading::South] {
+            assert_eq!(c.next_command(&map), Some(Move::Left));
+            c.on_result(&mut map, MoveResult::Turned);
+            assert_eq!(c.heading(), expected);
+        }
+        assert_eq!(c.next_command(&map), Some(Move::Forward));
+    }
+
+    /// A robot that can turn neither way and faces the grid's edge (Carto refuses that FORWARD
+    /// with a bare MOVE_DONE) gives its targets up and ends the sweep, instead of asking the same
+    /// turn until the time limit.
+    #[test]
+    fn a_robot_that_cannot_turn_and_faces_the_edge_ends_the_sweep() {
+        let mut map = Map::new(2, 2).unwrap();
+        map.set_free(0, 0).unwrap();
+        map.set_robot(0, 1).unwrap();
+        let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
+        c.cursor = 1;
+        // the serpentine wants (1, 1), south: RIGHT, taken as made; Carto refuses the FORWARD
+        // (east of (0, 1) is off the grid), so the RIGHT was not made
+        assert_eq!(c.next_command(&map), Some(Move::Right));
+        c.on_result(&mut map, MoveResult::Turned);
+        assert_eq!(c.next_command(&map), Some(Move::Forward));
+        c.on_result(&mut map, MoveResult::NotExecuted);
+        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 1));
+        // the other way round; that LEFT fails too
+        assert_eq!(c.next_command(&map), Some(Move::Left));
+        c.on_result(&mut map, MoveResult::Turned);
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::NotExecuted);
+        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 2));
+        // no turn left and nothing ahead: both cells below are given up, the sweep ends
+        assert_eq!(c.next_command(&map), None);
+        assert!(c.is_done());
+        assert_eq!(c.unreachable_cells(), vec![(1, 0), (1, 1)]);
     }
 
     #[test]

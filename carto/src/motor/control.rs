@@ -168,6 +168,19 @@ impl Motor {
                         m.phase = Phase::Settling { stopped_at: now };
                         return Step::Continue(Drive::STOP);
                     }
+                    // Jammed: the wheels turn, the IMU says the body does not.
+                    match m.progress {
+                        Some((at, left)) if at >= since && err.abs() > left - JAM_PROGRESS_DEG => {
+                            let stuck = now.saturating_since(at);
+                            if stuck >= cfg.jam_after {
+                                return Step::Finished(Err(MoveError::Jammed {
+                                    after_ms: stuck.total_millis(),
+                                    left_deg: err.abs(),
+                                }));
+                            }
+                        }
+                        _ => m.progress = Some((now, err.abs())),
+                    }
                     let pct = (cfg.turn_gain_pct_per_deg * err.abs())
                         .min(cfg.turn_max_pct)
                         .min(cfg.turn_min_pct + ramp)

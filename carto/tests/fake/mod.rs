@@ -43,6 +43,9 @@ pub struct FakeRobot {
     pub send_telemetry: bool,
     /// Wheels jammed: commands are decoded but nothing moves.
     pub jammed: bool,
+    /// Something beside the body: it cannot turn clockwise past this yaw, degrees (the wheels
+    /// spin and count, the IMU sees the body stop).
+    pub yaw_min_deg: Option<f64>,
     /// Motor time constant, seconds (Carto assumes 0.080).
     pub tau_s: f64,
     /// The motor board applies each drive frame this late (0 = at once).
@@ -85,6 +88,7 @@ impl FakeRobot {
             send_encoders: true,
             send_telemetry: false,
             jammed: false,
+            yaw_min_deg: None,
             tau_s: 0.080,
             drive_delay: Duration::ZERO,
             delayed: Default::default(),
@@ -172,6 +176,9 @@ impl FakeRobot {
         self.x += (vx * c - vy * s) * dt;
         self.y += (vx * s + vy * c) * dt;
         self.yaw += w * dt;
+        if let Some(min) = self.yaw_min_deg {
+            self.yaw = self.yaw.max(min.to_radians());
+        }
     }
 
     pub fn heading_cw_deg(&self) -> f32 {
