@@ -76,7 +76,7 @@ pub struct CartoStats {
     pub turns_shifted: u64,
     /// Turns refused: no shift cleared the known echoes.
     pub turns_refused: u64,
-    /// Turns that failed (jammed, timed out) and were turned back to their start heading.
+    /// Turns that failed (any move error) whose turn back to their start heading was started.
     pub turns_undone: u64,
     /// Along-track fixes against a wall seen before.
     pub wall_fixes: u64,

@@ -374,16 +374,19 @@ impl Motor {
         Ok(())
     }
 
-    /// Undoes a turn that failed (jammed, timed out): turns back to the grid heading it started
-    /// from, which becomes the reference again when the turn back succeeds. The way back is the
-    /// way the body just came, so it is free unless the body was pushed. Only once per failed
-    /// turn.
+    /// Undoes a turn that failed (any [`MoveError`]: jammed, timed out, not converged, a stale
+    /// reading): turns back to the grid heading it started from, which is the reference again
+    /// from now on, also when the turn back fails (it runs as a look, which leaves the reference
+    /// alone; [`Motor::learn_reference`] re-learns it if the body ends more than 20° away). The
+    /// way back is the way the body just came, so it is free unless the body was pushed. Only
+    /// once per failed turn.
     pub fn start_turn_back(&mut self, now: Instant, s: &SensorState) -> Result<(), MoveError> {
         let from = self.turn_from_deg.take().ok_or(MoveError::NothingToTurnBack)?;
         self.fresh_yaw(now, s)?;
         self.reference_deg = Some(from);
         self.odo.set_frame(from);
-        self.begin(now, Goal::Yaw { target_deg: from }, None, 0.0, s);
+        let goal = Goal::Yaw { target_deg: from };
+        self.begin_move(now, Move { look: true, ..Move::new(now, goal, None, 0.0) }, s);
         Ok(())
     }
 
@@ -424,6 +427,7 @@ impl Motor {
             }
         }
         self.outcome = None;
+        self.turn_from_deg = None;
         self.set_command(now, Drive::STOP, true);
     }
 

@@ -21,10 +21,12 @@
 //!   is skipped; both are logged.
 //! - `STOP_ROBOT` stops the motors now and drops every pending command and partial batch; no reply.
 //! - Tasks queue in arrival order; a new request never interrupts a running task (only STOP does).
-//! - A turn that fails — jammed (the IMU shows no progress for [`CartoConfig::jam_after`]) or
-//!   timed out — is turned back to the grid heading it started from before `MOVE_DONE`, so the
-//!   body faces the heading Carto still stores (Cute learns from the next FORWARD's reply that
-//!   the turn was not made).
+//! - A turn that fails — jammed (the IMU shows no progress for [`CartoConfig::jam_after`]), timed
+//!   out, not converged, a reading gone stale — is turned back to the grid heading it started
+//!   from before `MOVE_DONE`, so the body faces the heading Carto still stores (Cute learns from
+//!   the next FORWARD's reply that the turn was not made). A reconnect whose re-sent pose takes
+//!   that turn as made defeats this: the stored heading then follows Cute (README, "Known
+//!   limits").
 //! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
@@ -155,8 +157,8 @@ pub struct PilotCounters {
     pub turns_refused: u64,
     /// Along-track fixes against a wall seen before (`walls.rs`).
     pub wall_fixes: u64,
-    /// Turns that failed (jammed, timed out) and were turned back to the heading they started
-    /// from.
+    /// Turns that failed (any move error) whose turn back to the heading they started from was
+    /// started.
     pub turns_undone: u64,
 }
 

@@ -24,7 +24,8 @@
 //!
 //! Turns not made: Carto answers a turn it refused or could not finish (jammed, turned back) with
 //! MOVE_DONE alone, as a turn it made. The next FORWARD's reply shows the heading the robot really
-//! has (a refused FORWARD after a turn, when the old heading faces the grid's edge, shows it too),
+//! has (a FORWARD refused twice after a turn, when the old heading faces the grid's edge, shows it
+//! too),
 //! and that turn from that cell and heading is remembered as failed: the cartographer turns the
 //! other way round there, drives out straight ahead when no turn is left (at most
 //! [`MAX_ESCAPES_PER_CELL`] times per cell), and otherwise gives the target up as unreachable, so
@@ -168,8 +169,10 @@ pub struct Cartographer {
     stats: CartoStats,
     flood_seen: Vec<bool>,
     flood_stack: Vec<(u8, u8)>,
-    /// The last turn taken as made since the last FORWARD's reply.
-    unconfirmed_turn: Option<Move>,
+    /// The turns taken as made since the last FORWARD's reply: (heading before, turn).
+    unconfirmed_turns: Vec<(Heading, Move)>,
+    /// Bare MOVE_DONEs to a FORWARD since the last reply or turn.
+    refused_forwards: u8,
     /// Turns a reply showed were not made: (cell, heading before the turn, turn).
     failed_turns: Vec<((u8, u8), Heading, Move)>,
     /// FORWARDs sent from each cell because no turn was left there (`turn_escapes`), row-major.
@@ -212,7 +215,8 @@ impl Cartographer {
             stats: CartoStats::default(),
             flood_seen: vec![false; rows * cols],
             flood_stack: Vec::new(),
-            unconfirmed_turn: None,
+            unconfirmed_turns: Vec::new(),
+            refused_forwards: 0,
             failed_turns: Vec::new(),
             escapes: vec![0; rows * cols],
         })
@@ -412,6 +416,13 @@ impl Cartographer {
         }
     }
 
+    fn remember_failed_turn(&mut self, heading: Heading, turn: Move) {
+        if !self.turn_failed(self.pose, heading, turn) {
+            self.failed_turns.push((self.pose, heading, turn));
+            self.stats.turns_failed += 1;
+        }
+    }
+
     fn turn_failed(&self, cell: (u8, u8), heading: Heading, turn: Move) -> bool {
         self.failed_turns.contains(&(cell, heading, turn))
     }
@@ -515,12 +526,13 @@ impl Cartographer {
                     "Carto's reply shows the robot facing another way (a turn not made); following it"
                 );
                 self.stats.heading_resyncs += 1;
-                // Carto turns a failed turn back, so the robot faces where that turn started.
-                if let Some(turn) = self.unconfirmed_turn
-                    && !self.turn_failed(self.pose, faced, turn)
+                // Carto turns a failed turn back. Facing where the first of the turns started, all
+                // of them failed (each turns 90°), so the first certainly did; any other heading
+                // leaves open which one failed, and nothing is remembered.
+                if let Some(&(before, turn)) = self.unconfirmed_turns.first()
+                    && before == faced
                 {
-                    self.failed_turns.push((self.pose, faced, turn));
-                    self.stats.turns_failed += 1;
+                    self.remember_failed_turn(before, turn);
                 }
                 self.heading = faced;
                 self.plan.clear();
@@ -535,8 +547,9 @@ impl Cartographer {
         match result {
             MoveResult::Turned => match cmd {
                 Some(c) if c.is_turn() => {
+                    self.unconfirmed_turns.push((self.heading, c));
+                    self.refused_forwards = 0;
                     self.heading = self.heading.after(c);
-                    self.unconfirmed_turn = Some(c);
                 }
                 other => warn!(?other, "turn reported for a command that was not a turn"),
             },
@@ -547,7 +560,8 @@ impl Cartographer {
                     return;
                 }
                 self.follow_reply((x, y));
-                self.unconfirmed_turn = None;
+                self.unconfirmed_turns.clear();
+                self.refused_forwards = 0;
                 let (px, py) = (usize::from(self.pose.0), usize::from(self.pose.1));
                 if map.at(self.pose).is_some_and(|v| !v.is_known_free()) {
                     let _ = map.set_free(px, py);
@@ -563,7 +577,8 @@ impl Cartographer {
             MoveResult::Blocked { x, y } => {
                 self.stats.bumps += 1;
                 self.follow_reply((x, y));
-                self.unconfirmed_turn = None;
+                self.unconfirmed_turns.clear();
+                self.refused_forwards = 0;
                 if (x, y) != self.pose {
                     // Outside the map it cannot be written, and needs not be: it is never planned.
                     let _ = map.set_obstacle(usize::from(x), usize::from(y));
@@ -571,22 +586,21 @@ impl Cartographer {
                 self.plan.clear();
             }
             MoveResult::NotExecuted => {
-                // Carto refuses a FORWARD off the grid: after a turn taken as made, the likelier
-                // story is that the turn was not (it faces the edge it faced before).
-                if let (Some(Move::Forward), Some(turn)) = (cmd, self.unconfirmed_turn.take()) {
-                    let before = match turn {
-                        Move::Right => self.heading.left(),
-                        Move::Left => self.heading.right(),
-                        Move::Forward => self.heading,
-                    };
-                    if before.step(self.pose, self.rows, self.cols).is_none() {
-                        warn!(%before, "FORWARD refused after a turn, facing the grid's edge: the turn was not made");
+                // Carto refuses a FORWARD off the grid, every time. Refused twice after turns
+                // taken as made, where the heading before them faces the grid's edge, the likelier
+                // story is that they were not made (a single refusal may be a reading that came
+                // late).
+                if cmd == Some(Move::Forward)
+                    && let Some(&(before, turn)) = self.unconfirmed_turns.first()
+                {
+                    self.refused_forwards = self.refused_forwards.saturating_add(1);
+                    if self.refused_forwards >= 2 && before.step(self.pose, self.rows, self.cols).is_none() {
+                        warn!(%before, "FORWARD refused twice after a turn, facing the grid's edge: the turn was not made");
                         self.stats.heading_resyncs += 1;
-                        if !self.turn_failed(self.pose, before, turn) {
-                            self.failed_turns.push((self.pose, before, turn));
-                            self.stats.turns_failed += 1;
-                        }
+                        self.remember_failed_turn(before, turn);
                         self.heading = before;
+                        self.unconfirmed_turns.clear();
+                        self.refused_forwards = 0;
                         self.plan.clear();
                     }
                 }
@@ -691,9 +705,10 @@ mod tests {
         assert_eq!(c.next_command(&map), Some(Move::Forward));
     }
 
-    /// A robot that can turn neither way and faces the grid's edge (Carto refuses that FORWARD
-    /// with a bare MOVE_DONE) gives its targets up and ends the sweep, instead of asking the same
-    /// turn until the time limit.
+    /// A robot that can turn neither way and faces the grid's edge (Carto refuses every turn
+    /// there, and every FORWARD off the grid with a bare MOVE_DONE) gives its targets up and ends
+    /// the sweep, instead of asking the same turn until the time limit. Driven only through
+    /// `next_command`, as a session does.
     #[test]
     fn a_robot_that_cannot_turn_and_faces_the_edge_ends_the_sweep() {
         let mut map = Map::new(2, 2).unwrap();
@@ -701,23 +716,38 @@ mod tests {
         map.set_robot(0, 1).unwrap();
         let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
         c.cursor = 1;
-        // the serpentine wants (1, 1), south: RIGHT, taken as made; Carto refuses the FORWARD
-        // (east of (0, 1) is off the grid), so the RIGHT was not made
+        let mut sent = Vec::new();
+        while let Some(cmd) = c.next_command(&map) {
+            sent.push(cmd);
+            assert!(sent.len() <= 20, "no end: {sent:?}");
+            let result = if cmd.is_turn() { MoveResult::Turned } else { MoveResult::NotExecuted };
+            c.on_result(&mut map, result);
+        }
+        // RIGHT, two refused FORWARDs; then LEFT three times round, two refused FORWARDs
+        use Move::{Forward as F, Left as L, Right as R};
+        assert_eq!(sent, [R, F, F, L, L, L, F, F]);
+        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 2));
+        assert!(c.is_done());
+        assert_eq!(c.unreachable_cells(), vec![(1, 0), (1, 1)]);
+    }
+
+    /// One bare MOVE_DONE after a turn at the edge may be a late reading: the turn still counts
+    /// as made.
+    #[test]
+    fn one_refused_forward_after_a_turn_keeps_the_turn() {
+        let mut map = Map::new(2, 2).unwrap();
+        map.set_free(0, 0).unwrap();
+        map.set_robot(0, 1).unwrap();
+        let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
+        c.cursor = 1;
         assert_eq!(c.next_command(&map), Some(Move::Right));
         c.on_result(&mut map, MoveResult::Turned);
         assert_eq!(c.next_command(&map), Some(Move::Forward));
         c.on_result(&mut map, MoveResult::NotExecuted);
-        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 1));
-        // the other way round; that LEFT fails too
-        assert_eq!(c.next_command(&map), Some(Move::Left));
-        c.on_result(&mut map, MoveResult::Turned);
-        c.pending = Some(Move::Forward);
-        c.on_result(&mut map, MoveResult::NotExecuted);
-        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::East, 2));
-        // no turn left and nothing ahead: both cells below are given up, the sweep ends
-        assert_eq!(c.next_command(&map), None);
-        assert!(c.is_done());
-        assert_eq!(c.unreachable_cells(), vec![(1, 0), (1, 1)]);
+        assert_eq!((c.heading(), c.stats().turns_failed), (Heading::South, 0));
+        assert_eq!(c.next_command(&map), Some(Move::Forward));
+        c.on_result(&mut map, MoveResult::Moved { x: 1, y: 1 });
+        assert_eq!((c.pose(), c.heading(), c.stats().heading_resyncs), ((1, 1), Heading::South, 0));
     }
 
     #[test]

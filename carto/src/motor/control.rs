@@ -168,18 +168,21 @@ impl Motor {
                         m.phase = Phase::Settling { stopped_at: now };
                         return Step::Continue(Drive::STOP);
                     }
-                    // Jammed: the wheels turn, the IMU says the body does not.
+                    // Jammed: the wheels turn, the IMU says the body does not. Measured on the IMU's
+                    // own samples: the prediction extrapolates with the wheels' rate, which a jam
+                    // does not stop.
+                    let left_now = self.error(m, now, s, false).map_or(err.abs(), f64::abs);
                     match m.progress {
-                        Some((at, left)) if at >= since && err.abs() > left - JAM_PROGRESS_DEG => {
+                        Some((at, left)) if at >= since && left_now > left - JAM_PROGRESS_DEG => {
                             let stuck = now.saturating_since(at);
                             if stuck >= cfg.jam_after {
                                 return Step::Finished(Err(MoveError::Jammed {
                                     after_ms: stuck.total_millis(),
-                                    left_deg: err.abs(),
+                                    left_deg: left_now,
                                 }));
                             }
                         }
-                        _ => m.progress = Some((now, err.abs())),
+                        _ => m.progress = Some((now, left_now)),
                     }
                     let pct = (cfg.turn_gain_pct_per_deg * err.abs())
                         .min(cfg.turn_max_pct)

@@ -105,9 +105,9 @@ pub struct CuteConfig {
     /// Which Carto is on the other end.
     pub compat: Compat,
     /// How long one move may take before [`super::CuteEvent::MoveTimeout`] (per command in a
-    /// batch). The default, 20 s, is above the longest move our Carto can make without having
-    /// failed: a turn may be two motions (a shift clear of an echo, then the turn), each ended by
-    /// Carto's own 8 s limit (`CartoConfig::move_timeout`). With 5 s, a shift and a turn whose
+    /// batch). The default, 30 s, is above the longest move our Carto can make: a turn may be
+    /// three motions (a shift clear of an echo, the turn, and the turn back when it fails), each
+    /// ended by Carto's own 8 s limit (`CartoConfig::move_timeout`). With 5 s, a shift and a turn whose
     /// settle nudges repeat over a slow, lossy motor link ran out while Carto was still within
     /// its limits, and Cute stopped a mapping that would have finished.
     pub move_timeout: Duration,
@@ -144,7 +144,7 @@ impl Default for CuteConfig {
             start: (0, 0),
             heading: Heading::East,
             compat: Compat::Default,
-            move_timeout: Duration::from_secs(20),
+            move_timeout: Duration::from_secs(30),
             ack_timeout: Duration::from_secs(5),
             max_frame: link::DEFAULT_MAX_FRAME,
             map: None,
