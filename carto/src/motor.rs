@@ -385,9 +385,7 @@ impl Motor {
         self.fresh_yaw(now, s)?;
         self.reference_deg = Some(from);
         self.odo.set_frame(from);
-        let goal = Goal::Yaw { target_deg: from };
-        self.begin_move(now, Move { look: true, ..Move::new(now, goal, None, 0.0) }, s);
-        Ok(())
+        self.start_look(now, 0.0, s)
     }
 
     /// Starts a *look*: a turn on the spot to `offset_deg` (counter-clockwise) from the reference

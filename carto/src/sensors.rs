@@ -285,11 +285,7 @@ impl SensorState {
             Some(a) if y.at > a.at => (y.value - a.value) / (y.at - a.at).as_secs_f64(),
             _ => 0.0,
         };
-        let rates: [f64; 4] = core::array::from_fn(|i| self.wheel_rate_cps(i, now, cfg));
-        let [fl, fr, rl, rr] = rates;
-        let wheel_rate =
-            ((-fl + fr - rl + rr) / 4.0 / cfg.encoder_counts_per_metre() / cfg.rotation_lever_m())
-                .to_degrees();
+        let wheel_rate = wheel_yaw_of(core::array::from_fn(|i| self.wheel_rate_cps(i, now, cfg)), cfg);
         if imu_rate.abs() > 3.0 || wheel_rate.abs() > 3.0 {
             return;
         }
@@ -365,13 +361,7 @@ impl SensorState {
 
     /// Every wheel's count extrapolated to `now`, as floats; `None` until all four reported.
     pub fn predicted_counts(&self, now: Instant, cfg: &CartoConfig) -> Option<[f64; 4]> {
-        let mut out = [0.0; 4];
-        for (i, e) in self.encoders.iter().enumerate() {
-            let e = (*e)?;
-            let dt = now.saturating_since(e.at).min(cfg.max_extrapolation).as_secs_f64();
-            out[i] = f64::from(e.value) + self.wheel_rate_cps(i, now, cfg) * dt;
-        }
-        Some(out)
+        self.counts_at(now, now, cfg)
     }
 
     /// Mean forward speed of the four wheels, m/s (signed).

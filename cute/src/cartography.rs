@@ -61,7 +61,7 @@ use tracing::{debug, warn};
 use crate::astar::{AStar, Grid, TieBreak};
 use crate::map::{CellValue, MAX_SIDE, Map};
 use crate::trajectory::fill_grid;
-use robot_model::grid::{Heading, Move, turns_between};
+use robot_model::grid::{Heading, Move};
 
 /// Cost of entering an unknown cell in a detour, against 1 for a known free cell.
 pub const DEFAULT_UNKNOWN_COST: u8 = 2;
@@ -391,9 +391,9 @@ impl Cartographer {
 
     /// The first command that turns the robot from its heading to `want` (FORWARD when it faces
     /// it already): the shorter way round whose turns have not failed in this cell, RIGHT on a
-    /// tie (as [`turns_between`]); `None` when a failed turn bars both ways.
+    /// tie (as [`robot_model::grid::turns_between`]); `None` when a failed turn bars both ways.
     fn turn_towards(&self, want: Heading) -> Option<Move> {
-        if turns_between(self.heading, want).is_empty() {
+        if self.heading == want {
             return Some(Move::Forward);
         }
         let turns_needed = |dir: Move| {
@@ -472,6 +472,7 @@ impl Cartographer {
 
     /// Marks every unknown cell the robot cannot reach through non-blocked cells.
     fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
+        let before = self.stats.unreachable;
         self.flood_seen.fill(false);
         self.flood_stack.clear();
         if let Some(i) = self.index(self.pose) {
@@ -498,17 +499,10 @@ impl Cartographer {
                 newly += 1;
             }
         }
-        // The search failed, so the target must be among them; make sure progress is made.
-        if let Some(i) = self.index(target)
-            && !self.unreachable[i]
-        {
-            self.unreachable[i] = true;
-            newly += 1;
-        }
         self.stats.unreachable += newly;
-        debug!(?target, newly, "cells concluded unreachable");
-        self.target = None;
-        self.plan.clear();
+        // The search failed, so the target must be among them; make sure progress is made.
+        self.give_up(target);
+        debug!(?target, newly = self.stats.unreachable - before, "cells concluded unreachable");
     }
 
     /// A FORWARD's reply names the cell ahead of the robot as Carto knows it (the cell it moved
@@ -705,17 +699,24 @@ mod tests {
         assert_eq!(c.next_command(&map), Some(Move::Forward));
     }
 
+    /// A 2 × 2 area with (0, 0) mapped, the robot in (0, 1) facing EAST (the grid's edge) and
+    /// the serpentine past (0, 0), so it wants (1, 1), to the south, next.
+    fn at_the_east_edge() -> (Map, Cartographer) {
+        let mut map = Map::new(2, 2).unwrap();
+        map.set_free(0, 0).unwrap();
+        map.set_robot(0, 1).unwrap();
+        let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
+        c.cursor = 1;
+        (map, c)
+    }
+
     /// A robot that can turn neither way and faces the grid's edge (Carto refuses every turn
     /// there, and every FORWARD off the grid with a bare MOVE_DONE) gives its targets up and ends
     /// the sweep, instead of asking the same turn until the time limit. Driven only through
     /// `next_command`, as a session does.
     #[test]
     fn a_robot_that_cannot_turn_and_faces_the_edge_ends_the_sweep() {
-        let mut map = Map::new(2, 2).unwrap();
-        map.set_free(0, 0).unwrap();
-        map.set_robot(0, 1).unwrap();
-        let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
-        c.cursor = 1;
+        let (mut map, mut c) = at_the_east_edge();
         let mut sent = Vec::new();
         while let Some(cmd) = c.next_command(&map) {
             sent.push(cmd);
@@ -735,11 +736,7 @@ mod tests {
     /// as made.
     #[test]
     fn one_refused_forward_after_a_turn_keeps_the_turn() {
-        let mut map = Map::new(2, 2).unwrap();
-        map.set_free(0, 0).unwrap();
-        map.set_robot(0, 1).unwrap();
-        let mut c = Cartographer::new(2, 2, (0, 1), Heading::East).unwrap();
-        c.cursor = 1;
+        let (mut map, mut c) = at_the_east_edge();
         assert_eq!(c.next_command(&map), Some(Move::Right));
         c.on_result(&mut map, MoveResult::Turned);
         assert_eq!(c.next_command(&map), Some(Move::Forward));
