@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use crate::localisation::Localisation;
 use crate::scenario::Expectations;
 use crate::truth::RobotTruth;
-use crate::world::Unphysical;
+use crate::world::{Touched, Unphysical};
 
 /// Traffic on one direction of one link.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -122,6 +122,9 @@ pub struct FirstContact {
     pub belief_error_m: Option<f64>,
     /// The contact's class.
     pub cause: ContactCause,
+    /// What the robot touched (`None` in results written before it was recorded).
+    #[serde(default)]
+    pub touched: Option<Touched>,
 }
 
 /// Classes of [`FirstContact`], from Carto's activity and the truth ([`crate::truth`]).
@@ -398,11 +401,12 @@ impl Report {
             let belief = c.belief_error_m.map_or(String::new(), |e| format!(", Carto's belief {e:.3} m off"));
             let _ = writeln!(
                 s,
-                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief})",
+                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief}){}",
                 c.t_s,
                 c.carto_activity,
                 c.cause.describe(),
-                c.off_centre_m
+                c.off_centre_m,
+                c.touched.map_or(String::new(), |t| format!("; touched: {}", t.describe()))
             );
         }
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");

@@ -363,6 +363,7 @@ impl Lockstep {
                 off_centre_m,
                 belief_error_m: carto_believes.map(|(bx, by)| f64::from((p.x - bx).hypot(p.y - by))),
                 cause: ContactCause::classify(activity, move_ahead_exists, cell_turnable),
+                touched: self.twin.body().world().contacts_started().first().copied(),
             });
         }
     }

@@ -11,7 +11,7 @@ use robot_model::time::{Duration, Instant};
 use sha2::{Digest, Sha256};
 use sim::body::RobotBody;
 use sim::scenario::Scenario;
-use sim::world::SimWorld;
+use sim::world::{SimWorld, Touched};
 
 const DT: Duration = Duration::from_millis(5);
 
@@ -401,4 +401,37 @@ fn hitting_a_box_corner_at_top_speed_spins_the_body_but_is_physical() {
     assert!(body.world().collisions() >= 1);
     assert!(u.fastest_rad_s > 3.0, "turned at only {:.2} rad/s", u.fastest_rad_s);
     assert_eq!(u.steps, 0, "{u:?}");
+}
+
+/// Drives east at cruise speed from the origin of a room holding `obstacle`; returns what each
+/// contact that started touched, in order.
+fn touched_driving_east(obstacle: &str) -> Vec<Touched> {
+    let p = quiet_profile();
+    let mut body = RobotBody::new(&room(obstacle), &p, Pose2::new(0.0, 0.0, 0.0), DT);
+    let sp = setpoints(&p, Twist { vx: 0.36, vy: 0.0, omega: 0.0 });
+    let mut touched = Vec::new();
+    // 15 s: 5.4 m, past the room's east wall 5 m away
+    for _ in 0..3000 {
+        body.step(sp);
+        touched.extend_from_slice(body.world().contacts_started());
+    }
+    touched
+}
+
+#[test]
+fn a_contact_says_what_the_robot_touched() {
+    // a 4 cm leg in the body's path
+    assert_eq!(
+        touched_driving_east("Circle(center: (0.6, 0.05), radius: 0.02)"),
+        [Touched::Leg { width_m: 0.04 }]
+    );
+    // a box turned 120°: its sides lie 30° from the grid's lines
+    let touched = touched_driving_east("Box(center: (0.8, 0.0), size: (0.4, 0.4), angle_deg: 120.0)");
+    assert!(
+        matches!(touched.as_slice(), [Touched::Box { off_grid_deg }] if (off_grid_deg - 30.0).abs() < 1e-3),
+        "{touched:?}"
+    );
+    assert_eq!(touched[0].class(), "box turned past 22.5° from the grid");
+    // nothing in the way: the room's east wall, square to the grid
+    assert_eq!(touched_driving_east(""), [Touched::RoomWall { off_grid_deg: 0.0 }]);
 }

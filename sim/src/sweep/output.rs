@@ -283,6 +283,38 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
         let which = capped_list(runs, |r| format!("{} {}", short_room(&r.room), r.room_label()));
         let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which));
     }
+    touched_first(s, records);
+}
+
+/// The second table of "First contacts": what the robot touched ([`crate::world::Touched::class`]), split by
+/// what it was doing.
+fn touched_first(s: &mut String, records: &[RunRecord]) {
+    let mut by_class: BTreeMap<&str, Vec<&RunRecord>> = BTreeMap::new();
+    for r in records {
+        if let Some(c) = &r.first_contact {
+            by_class.entry(c.touched.map_or("not recorded", |t| t.class())).or_default().push(r);
+        }
+    }
+    let _ = writeln!(s, "\nWhat the robot touched first, and while doing what:\n");
+    let _ = writeln!(s, "| touched first | runs | during a FORWARD | during a turn | other | which |");
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---|");
+    let mut rows: Vec<(&str, Vec<&RunRecord>)> = by_class.into_iter().collect();
+    rows.sort_by_key(|(class, runs)| (std::cmp::Reverse(runs.len()), *class));
+    for (class, runs) in rows {
+        let count = |f: fn(ContactCause) -> bool| {
+            runs.iter().filter(|r| r.first_contact.as_ref().is_some_and(|c| f(c.cause))).count()
+        };
+        let forward = count(|c| matches!(c, ContactCause::ForwardBlockedMove | ContactCause::ForwardOffPath));
+        let turn = count(|c| matches!(c, ContactCause::TurnWhereNoTurn | ContactCause::TurnOffCentre));
+        let which = capped_list(&runs, |r| format!("{} {}", short_room(&r.room), r.room_label()));
+        let _ = writeln!(
+            s,
+            "| {class} | {} | {forward} | {turn} | {} | {} |",
+            runs.len(),
+            runs.len() - forward - turn,
+            cell(&which)
+        );
+    }
 }
 
 /// The "Not physical" list: runs in which the body moved faster than its wheels can drive it
@@ -437,9 +469,15 @@ mod tests {
     #[test]
     fn first_contacts_are_counted_by_cause_and_name_their_runs() {
         let line = |i: usize, room: &str, cause: Option<&str>| {
+            // the first two touched a leg, the third a turned box; older lines have no `touched`
+            let touched = match i {
+                0 | 1 => r#","touched":{"kind":"leg","width_m":0.03}"#,
+                2 => r#","touched":{"kind":"box","off_grid_deg":30.0}"#,
+                _ => "",
+            };
             let contact = cause.map_or("null".to_string(), |c| {
                 format!(
-                    r#"{{"t_s":1.0,"cell":[0,1],"carto_activity":"driving forward","off_centre_m":0.1,"belief_error_m":null,"cause":"{c}"}}"#
+                    r#"{{"t_s":1.0,"cell":[0,1],"carto_activity":"driving forward","off_centre_m":0.1,"belief_error_m":null,"cause":"{c}"{touched}}}"#
                 )
             });
             RunRecord::parse(
@@ -468,6 +506,19 @@ mod tests {
             "| {} | 1 | office room 1 seed 2 |",
             ContactCause::TurnWhereNoTurn.describe()
         )));
+        // what they touched, most first, split by what the robot was doing
+        assert!(
+            s.contains("| leg (8 cm or thinner) | 2 | 2 | 0 | 0 | flat room 3 seed 0, furnished seed 1 |"),
+            "{s}"
+        );
+        assert!(
+            s.contains("| box turned past 22.5° from the grid | 1 | 0 | 1 | 0 | office room 1 seed 2 |"),
+            "{s}"
+        );
+        let older = [line(3, "gen:office:2", Some("other"))];
+        let mut s = String::new();
+        first_contacts(&mut s, &older);
+        assert!(s.contains("| not recorded | 1 | 0 | 0 | 1 | office room 2 seed 3 |"), "{s}");
         // An older results.jsonl line without the field still reads; no contact, no table.
         let mut none = String::new();
         first_contacts(&mut none, &[line(0, "gen:flat:3", None)]);
