@@ -421,15 +421,15 @@ impl SimWorld {
                     self.bumper_half_width,
                 );
         }
-        self.started.clear();
-        for key in now_touching.difference(&self.touching) {
-            let handle = ColliderHandle::from_raw_parts(key.0, key.1);
-            let kind = self.colliders.get(handle).and_then(|c| self.shape_kinds.get(c.user_data as usize));
-            if let Some(kind) = kind {
-                self.started.push(*kind);
-            }
-        }
-        let started = now_touching.difference(&self.touching).count() as u32;
+        let new_keys: Vec<(u32, u32)> = now_touching.difference(&self.touching).copied().collect();
+        self.started = new_keys
+            .iter()
+            .filter_map(|&(index, generation)| {
+                let collider = self.colliders.get(ColliderHandle::from_raw_parts(index, generation))?;
+                self.shape_kinds.get(collider.user_data as usize).copied()
+            })
+            .collect();
+        let started = new_keys.len() as u32;
         if started > 0 {
             let at = self.robot_body().map(|b| b.translation());
             tracing::debug!(?at, front, "collision: contact started");

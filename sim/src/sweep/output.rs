@@ -280,14 +280,14 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
     let _ = writeln!(s, "| first contact | runs | which |");
     let _ = writeln!(s, "|---|---:|---|");
     for (cause, runs) in &by_cause {
-        let which = capped_list(runs, |r| format!("{} {}", short_room(&r.room), r.room_label()));
+        let which = capped_list(runs, |r| run_name(r));
         let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which));
     }
     touched_first(s, records);
 }
 
-/// The second table of "First contacts": what the robot touched ([`crate::world::Touched::class`]), split by
-/// what it was doing.
+/// The second table of "First contacts": what the robot touched
+/// ([`crate::world::Touched::class`]), split by what it was doing.
 fn touched_first(s: &mut String, records: &[RunRecord]) {
     let mut by_class: BTreeMap<&str, Vec<&RunRecord>> = BTreeMap::new();
     for r in records {
@@ -306,7 +306,7 @@ fn touched_first(s: &mut String, records: &[RunRecord]) {
         };
         let forward = count(|c| matches!(c, ContactCause::ForwardBlockedMove | ContactCause::ForwardOffPath));
         let turn = count(|c| matches!(c, ContactCause::TurnWhereNoTurn | ContactCause::TurnOffCentre));
-        let which = capped_list(&runs, |r| format!("{} {}", short_room(&r.room), r.room_label()));
+        let which = capped_list(&runs, |r| run_name(r));
         let _ = writeln!(
             s,
             "| {class} | {} | {forward} | {turn} | {} | {} |",
@@ -334,7 +334,7 @@ fn not_physical_runs(s: &mut String, records: &[RunRecord]) {
         runs.len(),
         records.len()
     );
-    let which = capped_list(&runs, |(r, t)| format!("{} {} ({t:.1} s)", short_room(&r.room), r.room_label()));
+    let which = capped_list(&runs, |(r, t)| format!("{} ({t:.1} s)", run_name(r)));
     let _ = writeln!(s, "{which}");
 }
 
@@ -346,6 +346,11 @@ fn capped_list<T>(items: &[T], label: impl Fn(&T) -> String) -> String {
         which.push(format!("…and {} more", items.len() - MAX_LISTED));
     }
     which.join(", ")
+}
+
+/// A run as the summary's lists name it: the room and its label, e.g. "flat room 3 seed 3".
+fn run_name(r: &RunRecord) -> String {
+    format!("{} {}", short_room(&r.room), r.room_label())
 }
 
 /// A room id without the file's folders or the generator's seed (the label has it).
