@@ -80,6 +80,8 @@ pub struct CartoStats {
     pub turns_undone: u64,
     /// Along-track fixes against a wall seen before.
     pub wall_fixes: u64,
+    /// Sonar readings kept while a turn ran (near its end, close echoes only).
+    pub turn_readings: u64,
     /// Times the sensor board was declared lost.
     pub peer_lost_events: u64,
     /// Drive frames sent to the motor board.
@@ -466,6 +468,7 @@ impl Carto {
             turns_shifted: p.turns_shifted,
             turns_refused: p.turns_refused,
             turns_undone: p.turns_undone,
+            turn_readings: p.turn_readings,
             wall_fixes: p.wall_fixes,
             ..self.stats
         }

@@ -51,6 +51,13 @@ pub struct CartoConfig {
     /// right of the grid heading (two small turns on the spot and back), degrees; `0` turns the
     /// scan off (one straight reading, as in the design document). See [`crate::surroundings`].
     pub scan_deg: f64,
+    /// Keep the sonar's readings taken while a turn runs, as echo points placed from the heading
+    /// the IMU had when the sonar measured (`pilot/safety.rs`, "Readings in turns").
+    pub turn_readings: bool,
+    /// How long before a distance frame arrives its reading was measured, on average: half the
+    /// HC-SR04's measuring cycle (the board sends the latest result). Places readings taken in
+    /// turns.
+    pub sonar_lag: Duration,
     /// Body length (front to back), metres: the footprint the corridor and turn checks sweep.
     pub body_length_m: f64,
     /// Body width, metres.
@@ -192,6 +199,8 @@ impl Default for CartoConfig {
             distance_wait: Duration::from_millis(1000),
             distance_max_age: Duration::from_millis(300),
             scan_deg: 0.0,
+            turn_readings: true,
+            sonar_lag: Duration::from_millis(30),
             body_length_m: 0.26,
             body_width_m: 0.24,
             sonar_mount_m: 0.13,
@@ -281,6 +290,7 @@ impl CartoConfig {
             sonar_cone_deg: f(profile.sonar.cone_deg),
             sonar_sigma_m: f(profile.sonar.noise_sigma_cm) / 100.0,
             sonar_max_m: f(profile.sonar.max_cm) / 100.0,
+            sonar_lag: Duration::from_micros(u64::from(profile.sonar.cycle_ms) * 500),
             peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
             motor_baud: profile.serial.motor_baud,
             sensor_baud: profile.serial.sensor_baud,

@@ -248,6 +248,11 @@ impl Motor {
         }
     }
 
+    /// The configuration it drives by.
+    pub fn config(&self) -> &CartoConfig {
+        &self.cfg
+    }
+
     /// Whether a move is running.
     pub fn is_busy(&self) -> bool {
         self.current.is_some()

@@ -160,6 +160,8 @@ pub struct PilotCounters {
     /// Turns that failed (any move error) whose turn back to the heading they started from was
     /// started.
     pub turns_undone: u64,
+    /// Sonar readings kept while a turn ran (`pilot/safety.rs`, "Readings in turns").
+    pub turn_readings: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -268,12 +270,17 @@ pub struct Pilot {
     counters: PilotCounters,
     safety: Safety,
     surroundings: Surroundings,
+    /// Echoes heard while a turn ran (`pilot/safety.rs`, "Readings in turns"): only the
+    /// corridor check before a FORWARD asks them.
+    turn_echoes: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,
     /// The last straight reading at rest, for the along-track fix of the next one.
     last_straight: Option<safety::Straight>,
     /// Surfaces seen straight ahead, for the absolute along-track fix.
     walls: Walls,
+    /// When the last reading kept during a turn arrived.
+    last_turn_reading: Option<Instant>,
 }
 
 impl Pilot {
@@ -293,9 +300,11 @@ impl Pilot {
             counters: PilotCounters::default(),
             safety: Safety::new(cfg),
             surroundings: Surroundings::default(),
+            turn_echoes: Surroundings::default(),
             scan_missing: false,
             last_straight: None,
             walls: Walls::default(),
+            last_turn_reading: None,
         }
     }
 
@@ -357,7 +366,7 @@ impl Pilot {
                         // the next move still ends on a cell centre.
                         if self.pose != Some(pose) {
                             motor.reset_odometry();
-                            self.surroundings.clear();
+                            self.forget_surroundings();
                             self.last_straight = None;
                             self.walls.clear();
                         }
@@ -464,7 +473,7 @@ impl Pilot {
         if !matches!(self.stage, Stage::Next) {
             // stopped in the middle of a scan or a shift: the robot may face off the grid heading
             // and is somewhere Carto did not plan; what it saw from there is not trusted
-            self.surroundings.clear();
+            self.forget_surroundings();
         }
         self.queue.clear();
         self.current = None;
@@ -567,6 +576,9 @@ impl Pilot {
                     }
                 }
                 Stage::Moving { kind, since } => {
+                    if kind.is_turn() {
+                        self.note_turn_reading(now, kind, since, motor, sensors, us);
+                    }
                     if kind == Move::Forward && sensors.bumper_pressed_since(since) {
                         self.bumped(now, motor, sensors);
                         continue;
@@ -640,7 +652,7 @@ impl Pilot {
     fn move_succeeded(&mut self, kind: Move) {
         let Some(pose) = self.pose.as_mut() else {
             // without a pose the echo points cannot follow the robot
-            self.surroundings.clear();
+            self.forget_surroundings();
             return;
         };
         match kind {

@@ -103,18 +103,31 @@ impl Surroundings {
         half_cone_deg: f64,
         max_range_m: f64,
     ) {
-        let (sx, sy) = robot.offset(mount_m, 0.0);
-        let sonar = Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg };
         let Some(range_m) = range_m else {
             return;
         };
+        self.clear_seen_through(robot, mount_m, range_m, half_cone_deg, max_range_m);
+        self.add_echo(robot, mount_m, range_m);
+    }
+
+    /// Forgets the points inside the cone closer than the echo `range_m` (what [`Self::add_reading`]
+    /// clears), without keeping the echo.
+    pub fn clear_seen_through(
+        &mut self,
+        robot: Pose2,
+        mount_m: f64,
+        range_m: f64,
+        half_cone_deg: f64,
+        max_range_m: f64,
+    ) {
+        let (sx, sy) = robot.offset(mount_m, 0.0);
+        let sonar = Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg };
         let seen_through = range_m.min(max_range_m) - SEEN_THROUGH_MARGIN_M;
         let tan = half_cone_deg.to_radians().tan();
         self.points.retain(|&p| {
             let (along, left) = sonar.local(p);
             !(along > 0.0 && along < seen_through && left.abs() <= along * tan)
         });
-        self.add_echo(robot, mount_m, range_m);
     }
 
     /// Forgets the points inside the body's rectangle at `robot` (`half_length_m` ahead and

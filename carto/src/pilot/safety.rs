@@ -38,6 +38,21 @@
 //!   absolutely, with the same gain, instead of the relative fix: drift that built up over a long
 //!   mission is removed too ([`CartoConfig::wall_fix`]).
 //!
+//! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
+//!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
+//!   target, with an echo no farther than one cell, is kept ([`CartoConfig::turn_readings`]):
+//!   near the end of a turn the cone sweeps beside the path of the FORWARD that may follow,
+//!   where the straight reading at rest does not look (a chair leg or a box corner at the side
+//!   of the next cell), and it sees a sofa too close for the reading at rest (an echo under
+//!   the HC-SR04's 2 cm minimum reads "no echo"). The heading is the IMU's, carried at the yaw
+//!   rate to when the sonar measured ([`CartoConfig::sonar_lag`], half its cycle, before the
+//!   frame arrived). The echo could come from anywhere across the cone; it is kept on the
+//!   cone's edge farther from the line of the next FORWARD, so it blocks that FORWARD only when
+//!   the whole arc lies in the body's path. These points feed only the corridor check, never
+//!   the turn check: a turn would shift away from an echo whose position is this uncertain.
+//!   Readings at rest clear them as they clear the others. Measured in the README ("Safety
+//!   checks"): on central rays, or over wider windows, they blocked moves that were free.
+//!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
 
@@ -55,6 +70,9 @@ use crate::ultrasound::Ultrasound;
 const SHIFT_STEP_M: f64 = 0.01;
 /// Echoes further than this are not used for the along-track fix (the cone widens), metres.
 pub const ALONG_FIX_MAX_M: f64 = 2.0;
+/// Readings in turns are kept only while the heading is this close to the turn's target,
+/// degrees: they look beside the path of the FORWARD that may follow.
+const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// A larger disagreement between sonar and wheels means two different objects answered, metres.
 pub const ALONG_FIX_MAX_ERROR_M: f64 = 0.05;
 /// Echoes further than this are not kept as walls nor matched with them, metres (the cone is
@@ -89,6 +107,10 @@ pub(super) struct Safety {
     safe_turns: bool,
     /// Shifts before a turn may strafe across the heading too.
     strafe_shifts: bool,
+    /// Keep the readings taken while a turn runs.
+    turn_readings: bool,
+    /// How long before its frame arrives a reading was measured.
+    sonar_lag_s: f64,
 }
 
 impl Safety {
@@ -113,6 +135,8 @@ impl Safety {
             turn_clear_m: cfg.turn_radius_m() + cfg.clearance_m,
             safe_turns: cfg.safe_turns,
             strafe_shifts: cfg.strafe_shifts,
+            turn_readings: cfg.turn_readings,
+            sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
         }
     }
 
@@ -203,7 +227,67 @@ impl Pilot {
             let range = cm.map(|cm| f64::from(cm) / 100.0);
             self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
             self.surroundings.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
+            self.turn_echoes.clear_footprint(robot, s.half_length_m, s.half_width_m);
+            if let Some(range) = range {
+                self.turn_echoes.clear_seen_through(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
+            }
         }
+    }
+
+    /// Forgets every echo point (a new pose from Cute, or none: they were placed from another).
+    pub(super) fn forget_surroundings(&mut self) {
+        self.surroundings.clear();
+        self.turn_echoes.clear();
+    }
+
+    /// Keeps the newest reading if it arrived while the turn `turn`, started at `since`, runs
+    /// (module docs, "Readings in turns").
+    pub(super) fn note_turn_reading(
+        &mut self,
+        now: Instant,
+        turn: Move,
+        since: Instant,
+        motor: &Motor,
+        sensors: &SensorState,
+        us: &Ultrasound,
+    ) {
+        let s = self.safety;
+        let Some(r) = us.latest() else { return };
+        if !s.turn_readings || r.at < since || self.last_turn_reading.is_some_and(|t| r.at <= t) {
+            return;
+        }
+        self.last_turn_reading = Some(r.at);
+        let range = f64::from(r.value) / 100.0;
+        let (Some(pose), Some(mut robot), Some(yaw)) =
+            (self.pose, self.believed(motor, sensors), sensors.yaw_deg())
+        else {
+            return;
+        };
+        if !(0.0..=s.cell_m).contains(&range) {
+            return;
+        }
+        // the heading when the sonar measured: the last IMU sample carried at the yaw rate to
+        // the frame's arrival, less the sonar's lag
+        let measured_after_sample_s = r.at.saturating_since(yaw.at).as_secs_f64()
+            - yaw.at.saturating_since(r.at).as_secs_f64()
+            - s.sonar_lag_s;
+        robot.yaw_deg += sensors.yaw_rate_dps(now, motor.config()) * measured_after_sample_s;
+        let target = heading_deg(pose.heading) + if turn == Move::Left { 90.0 } else { -90.0 };
+        if crate::sensors::wrap180(robot.yaw_deg - target).abs() > TURN_READING_WINDOW_DEG {
+            return;
+        }
+        // The echo may come from anywhere across the cone: it is kept on the cone's edge farther
+        // from the line the next FORWARD would drive, so that it blocks that FORWARD only when
+        // the whole arc lies in the body's path.
+        let ahead = Pose2 { yaw_deg: target, ..robot };
+        let (sx, sy) = robot.offset(s.mount_m, 0.0);
+        let edge = |side: f64| Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg + side * s.half_cone_deg };
+        let beside_path = |edge: Pose2| ahead.local(edge.offset(range, 0.0)).1.abs();
+        let (right, left) = (edge(-1.0), edge(1.0));
+        let farther = if beside_path(right) >= beside_path(left) { right } else { left };
+        tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
+        self.counters.turn_readings += 1;
+        self.turn_echoes.add_echo(farther, 0.0, range);
     }
 
     /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
@@ -261,7 +345,10 @@ impl Pilot {
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
             let to = s.cell_m - along + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
-            if let Some((a, l)) = self.surroundings.first_in_corridor(robot, s.mount_m, to, half) {
+            let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
+            if let Some((a, l)) =
+                known.or_else(|| self.turn_echoes.first_in_corridor(robot, s.mount_m, to, half))
+            {
                 tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
                 self.counters.corridor_blocked += 1;
                 self.report_obstacle();
@@ -269,7 +356,7 @@ impl Pilot {
             }
         }
         if self.pose.is_none() {
-            self.surroundings.clear();
+            self.forget_surroundings();
         }
         match motor.start_next_cell(now, sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
