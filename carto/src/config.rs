@@ -51,8 +51,9 @@ pub struct CartoConfig {
     /// right of the grid heading (two small turns on the spot and back), degrees; `0` turns the
     /// scan off (one straight reading, as in the design document). See [`crate::surroundings`].
     pub scan_deg: f64,
-    /// Keep the sonar's readings taken while a turn runs, as echo points placed from the heading
-    /// the IMU had when the sonar measured (`pilot/safety.rs`, "Readings in turns").
+    /// Keep the sonar's readings taken in the last 20° of a turn, echoes within one cell, as
+    /// echo points placed from the heading the IMU had when the sonar measured, for the corridor
+    /// check of the FORWARD right after the turn (`pilot/safety.rs`, "Readings in turns").
     pub turn_readings: bool,
     /// How long before a distance frame arrives its reading was measured, on average: half the
     /// HC-SR04's measuring cycle (the board sends the latest result). Places readings taken in

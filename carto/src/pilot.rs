@@ -270,8 +270,8 @@ pub struct Pilot {
     counters: PilotCounters,
     safety: Safety,
     surroundings: Surroundings,
-    /// Echoes heard while a turn ran (`pilot/safety.rs`, "Readings in turns"): only the
-    /// corridor check before a FORWARD asks them.
+    /// Echoes heard while the last turn ran (`pilot/safety.rs`, "Readings in turns"): only the
+    /// corridor check of the FORWARD right after it asks them.
     turn_echoes: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,

@@ -168,19 +168,20 @@ fn a_wall_seen_before_fixes_the_position_after_a_reading_without_echo() {
     );
 }
 
-/// A right turn from EAST to SOUTH with the sonar reading `cm` while the heading lies in
-/// `while_deg` (clockwise from east), no echo otherwise; then a FORWARD with no echo ahead
-/// (a sofa closer than the sensor's 2 cm minimum reads so). The replies to the FORWARD.
-fn forward_after_a_turn_seen(cfg: CartoConfig, cm: f32, while_deg: (f32, f32)) -> Vec<GuiMessage> {
-    forward_after_a_turn(cfg, cm, while_deg).0
-}
-
-/// As [`forward_after_a_turn_seen`], with the number of readings Carto kept during the turn.
-fn forward_after_a_turn(cfg: CartoConfig, cm: f32, while_deg: (f32, f32)) -> (Vec<GuiMessage>, u64) {
+/// A turn from EAST (`Right` to SOUTH, `Left` to NORTH) with the sonar reading `cm` while the
+/// heading lies in `while_deg` (clockwise from east), no echo otherwise; then a FORWARD with no
+/// echo ahead (a sofa closer than the sensor's 2 cm minimum reads so). The replies to the
+/// FORWARD, and how many readings Carto kept during the turn.
+fn forward_after_a_turn(
+    cfg: CartoConfig,
+    turn: Command,
+    cm: f32,
+    while_deg: (f32, f32),
+) -> (Vec<GuiMessage>, u64) {
     let mut h = ready_with(cfg);
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    h.send(cartography(Command::Right));
+    h.send(cartography(turn));
     for _ in 0..8000 {
         let cw = h.robot.heading_cw_deg();
         h.robot.distance_cm = if (while_deg.0..=while_deg.1).contains(&cw) { cm } else { -1.0 };
@@ -198,32 +199,71 @@ fn forward_after_a_turn(cfg: CartoConfig, cm: f32, while_deg: (f32, f32)) -> (Ve
     (h.reply_msgs(), h.carto.stats().turn_readings)
 }
 
+const BLOCKED_SOUTH: [GuiMessage; 2] = [GuiMessage::SetObstaclePosition { x: 6, y: 5 }, GuiMessage::MoveDone];
+const DROVE_SOUTH: [GuiMessage; 2] = [GuiMessage::SetRobotPosition { x: 6, y: 5 }, GuiMessage::MoveDone];
+
 #[test]
 fn a_reading_late_in_a_turn_blocks_the_forward_after_it() {
     // 4 cm from the sonar while the robot is within 15 degrees of SOUTH: something in the path
-    let seen = forward_after_a_turn_seen(fake::test_config(), 4.0, (75.0, 105.0));
-    assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 6, y: 5 }, GuiMessage::MoveDone]);
+    let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 4.0, (75.0, 105.0));
+    assert_eq!(seen, BLOCKED_SOUTH);
+    assert!(kept >= 1);
     // without the readings in turns only the "no echo" at rest counts, and the robot drives
     let off = CartoConfig { turn_readings: false, ..fake::test_config() };
-    let blind = forward_after_a_turn_seen(off, 4.0, (75.0, 105.0));
-    assert_eq!(blind, vec![GuiMessage::SetRobotPosition { x: 6, y: 5 }, GuiMessage::MoveDone]);
+    let (blind, kept) = forward_after_a_turn(off, Command::Right, 4.0, (75.0, 105.0));
+    assert_eq!((blind, kept), (DROVE_SOUTH.to_vec(), 0));
+    // the same to the left, towards NORTH (270 degrees clockwise from east)
+    let (seen, _) = forward_after_a_turn(fake::test_config(), Command::Left, 4.0, (255.0, 285.0));
+    assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
 }
 
 #[test]
 fn a_reading_early_in_a_turn_is_not_kept() {
     // 10 cm while the robot faces 25-35 degrees short of SOUTH: outside the 20-degree window,
     // where a heading error of the moving robot would move the echo across the path
-    let seen = forward_after_a_turn_seen(fake::test_config(), 10.0, (55.0, 65.0));
-    assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 6, y: 5 }, GuiMessage::MoveDone]);
+    let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 10.0, (55.0, 65.0));
+    assert_eq!((seen, kept), (DROVE_SOUTH.to_vec(), 0));
 }
 
 #[test]
 fn a_reading_in_a_turn_is_kept_on_the_edge_of_the_cone_away_from_the_path() {
-    // 30 cm while the robot faces 14-20 degrees short of SOUTH. On the cone's central ray the
+    // 30 cm while the robot faces 15-18 degrees short of SOUTH. On the cone's central ray the
     // echo would lie about 13 cm beside the path, inside the 14 cm half corridor; the cone's
     // edge farther from the path puts it about 17 cm out. The echo could come from anywhere
     // across the cone, so only an echo whose whole arc lies in the path blocks: the robot drives.
-    let (seen, kept) = forward_after_a_turn(fake::test_config(), 30.0, (70.0, 76.0));
+    let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
-    assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 6, y: 5 }, GuiMessage::MoveDone]);
+    assert_eq!(seen, DROVE_SOUTH);
+    // with a cone of no width the edge is the central ray, and the same reading blocks
+    let narrow = CartoConfig { sonar_cone_deg: 0.0, ..fake::test_config() };
+    let (seen, kept) = forward_after_a_turn(narrow, Command::Right, 30.0, (72.0, 75.0));
+    assert!(kept >= 1, "no reading kept during the turn");
+    assert_eq!(seen, BLOCKED_SOUTH);
+}
+
+#[test]
+fn echoes_heard_in_a_turn_serve_only_the_forward_after_it() {
+    // heard late in the right turn, then a left turn back to EAST and a right turn to SOUTH
+    // again with nothing heard: the second FORWARD south drives
+    let mut h = ready_with(fake::test_config());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Right));
+    for _ in 0..8000 {
+        let cw = h.robot.heading_cw_deg();
+        h.robot.distance_cm = if (75.0..=105.0).contains(&cw) { 4.0 } else { -1.0 };
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    h.robot.distance_cm = -1.0;
+    h.send(cartography(Command::Left));
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
+    h.run_ms(150);
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the FORWARD");
+    assert_eq!(h.reply_msgs(), DROVE_SOUTH);
 }

@@ -13,7 +13,8 @@
 //!   threshold does). Otherwise Carto answers
 //!   `SET_OBSTACLE_POSITION` for the cell ahead, as for a close straight echo.
 //! - **Footprint.** Before every reading at rest and every turn check, the points inside the
-//!   body's rectangle where Carto believes it stands are forgotten
+//!   body's rectangle where Carto believes it stands are forgotten (the turn check does not ask
+//!   the echoes heard in turns, below, and they are forgotten when a turn starts)
 //!   ([`crate::surroundings::Surroundings::clear_footprint`]).
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
 //!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
@@ -44,9 +45,10 @@
 //!   near the end of a turn the cone sweeps beside the path of the FORWARD that may follow,
 //!   where the straight reading at rest does not look (a chair leg or a box corner at the side
 //!   of the next cell), and it sees a sofa too close for the reading at rest (an echo under
-//!   the HC-SR04's 2 cm minimum reads "no echo"). The heading is the IMU's, carried at the yaw
+//!   the HC-SR04's 2 cm minimum reads "no echo"). They serve the FORWARD right after the turn
+//!   only: they are forgotten when that FORWARD starts or another turn does. The heading is the IMU's, carried at the yaw
 //!   rate to when the sonar measured ([`CartoConfig::sonar_lag`], half its cycle, before the
-//!   frame arrived). The echo could come from anywhere across the cone; it is kept on the
+//!   frame arrived; carried at most [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it is kept on the
 //!   cone's edge farther from the line of the next FORWARD, so it blocks that FORWARD only when
 //!   the whole arc lies in the body's path. These points feed only the corridor check, never
 //!   the turn check: a turn would shift away from an echo whose position is this uncertain.
@@ -253,7 +255,13 @@ impl Pilot {
     ) {
         let s = self.safety;
         let Some(r) = us.latest() else { return };
-        if !s.turn_readings || r.at < since || self.last_turn_reading.is_some_and(|t| r.at <= t) {
+        // a turn that ended on this poll has already moved the reference heading to its target
+        // while the stored pose still faces the old one: the believed heading would be 90° off
+        if !s.turn_readings
+            || !motor.is_busy()
+            || r.at < since
+            || self.last_turn_reading.is_some_and(|t| r.at <= t)
+        {
             return;
         }
         self.last_turn_reading = Some(r.at);
@@ -268,10 +276,13 @@ impl Pilot {
         }
         // the heading when the sonar measured: the last IMU sample carried at the yaw rate to
         // the frame's arrival, less the sonar's lag
-        let measured_after_sample_s = r.at.saturating_since(yaw.at).as_secs_f64()
+        let cfg = motor.config();
+        let max_s = cfg.max_extrapolation.as_secs_f64();
+        let measured_after_sample_s = (r.at.saturating_since(yaw.at).as_secs_f64()
             - yaw.at.saturating_since(r.at).as_secs_f64()
-            - s.sonar_lag_s;
-        robot.yaw_deg += sensors.yaw_rate_dps(now, motor.config()) * measured_after_sample_s;
+            - s.sonar_lag_s)
+            .clamp(-max_s, max_s);
+        robot.yaw_deg += sensors.yaw_rate_dps(now, cfg) * measured_after_sample_s;
         let target = heading_deg(pose.heading) + if turn == Move::Left { 90.0 } else { -90.0 };
         if crate::sensors::wrap180(robot.yaw_deg - target).abs() > TURN_READING_WINDOW_DEG {
             return;
@@ -358,6 +369,8 @@ impl Pilot {
         if self.pose.is_none() {
             self.forget_surroundings();
         }
+        // the echoes heard in the turn were for this FORWARD only
+        self.turn_echoes.clear();
         match motor.start_next_cell(now, sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
             Err(e) => self.fail(now, &e.to_string()),
