@@ -168,9 +168,36 @@ fn a_wall_seen_before_fixes_the_position_after_a_reading_without_echo() {
     );
 }
 
-/// A turn from EAST (`Right` to SOUTH, `Left` to NORTH) with the sonar reading `cm` while the
-/// heading lies in `while_deg` (clockwise from east), no echo otherwise; then a FORWARD with no
-/// echo ahead (a sofa closer than the sensor's 2 cm minimum reads so). The replies to the
+/// Sends the turn `turn` from EAST (`Right` to SOUTH, `Left` to NORTH) with the sonar reading
+/// `cm` while the heading lies in `while_deg` (clockwise from east), no echo otherwise, and
+/// waits for its `MOVE_DONE`; the sonar reads no echo after it.
+fn turn_hearing(h: &mut Harness, turn: Command, cm: f32, while_deg: (f32, f32)) {
+    let done = h.move_done_count();
+    h.send(cartography(turn));
+    for _ in 0..8000 {
+        let cw = h.robot.heading_cw_deg();
+        h.robot.distance_cm = if (while_deg.0..=while_deg.1).contains(&cw) { cm } else { -1.0 };
+        h.run_ms(1);
+        if h.move_done_count() == done + 1 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), done + 1, "no MOVE_DONE for the turn");
+    h.robot.distance_cm = -1.0;
+}
+
+/// A FORWARD with no echo ahead (a sofa closer than the sensor's 2 cm minimum reads so): its
+/// replies.
+fn forward_without_echo(h: &mut Harness) -> Vec<GuiMessage> {
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the FORWARD");
+    h.reply_msgs()
+}
+
+/// [`turn_hearing`] from the start pose, then [`forward_without_echo`]: the replies to the
 /// FORWARD, and how many readings Carto kept during the turn.
 fn forward_after_a_turn(
     cfg: CartoConfig,
@@ -181,22 +208,8 @@ fn forward_after_a_turn(
     let mut h = ready_with(cfg);
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    h.send(cartography(turn));
-    for _ in 0..8000 {
-        let cw = h.robot.heading_cw_deg();
-        h.robot.distance_cm = if (while_deg.0..=while_deg.1).contains(&cw) { cm } else { -1.0 };
-        h.run_ms(1);
-        if h.move_done_count() == 1 {
-            break;
-        }
-    }
-    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.replies.clear();
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the FORWARD");
-    (h.reply_msgs(), h.carto.stats().turn_readings)
+    turn_hearing(&mut h, turn, cm, while_deg);
+    (forward_without_echo(&mut h), h.carto.stats().turn_readings)
 }
 
 const BLOCKED_SOUTH: [GuiMessage; 2] = [GuiMessage::SetObstaclePosition { x: 6, y: 5 }, GuiMessage::MoveDone];
@@ -248,22 +261,9 @@ fn echoes_heard_in_a_turn_serve_only_the_forward_after_it() {
     let mut h = ready_with(fake::test_config());
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    h.send(cartography(Command::Right));
-    for _ in 0..8000 {
-        let cw = h.robot.heading_cw_deg();
-        h.robot.distance_cm = if (75.0..=105.0).contains(&cw) { 4.0 } else { -1.0 };
-        h.run_ms(1);
-        if h.move_done_count() == 1 {
-            break;
-        }
-    }
-    h.robot.distance_cm = -1.0;
+    turn_hearing(&mut h, Command::Right, 4.0, (75.0, 105.0));
     h.send(cartography(Command::Left));
     h.send(cartography(Command::Right));
     assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
-    h.run_ms(150);
-    h.replies.clear();
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the FORWARD");
-    assert_eq!(h.reply_msgs(), DROVE_SOUTH);
+    assert_eq!(forward_without_echo(&mut h), DROVE_SOUTH);
 }

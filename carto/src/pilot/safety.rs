@@ -46,11 +46,12 @@
 //!   where the straight reading at rest does not look (a chair leg or a box corner at the side
 //!   of the next cell), and it sees a sofa too close for the reading at rest (an echo under
 //!   the HC-SR04's 2 cm minimum reads "no echo"). They serve the FORWARD right after the turn
-//!   only: they are forgotten when that FORWARD starts or another turn does. The heading is the IMU's, carried at the yaw
-//!   rate to when the sonar measured ([`CartoConfig::sonar_lag`], half its cycle, before the
-//!   frame arrived; carried at most [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it is kept on the
-//!   cone's edge farther from the line of the next FORWARD, so it blocks that FORWARD only when
-//!   the whole arc lies in the body's path. These points feed only the corridor check, never
+//!   only: they are forgotten when that FORWARD starts or another turn does. The heading is
+//!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`],
+//!   half its cycle, before the frame arrived; carried at most
+//!   [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it
+//!   is kept on the cone's edge farther from the line of the next FORWARD, so it blocks that
+//!   FORWARD only when the whole arc lies in the body's path. These points feed only the corridor check, never
 //!   the turn check: a turn would shift away from an echo whose position is this uncertain.
 //!   Readings at rest clear them as they clear the others. Measured in the README ("Safety
 //!   checks"): on central rays, or over wider windows, they blocked moves that were free.
