@@ -55,6 +55,10 @@ pub struct CartoConfig {
     /// echo points placed from the heading the IMU had when the sonar measured, for the corridor
     /// check of the FORWARD right after the turn (`pilot/safety.rs`, "Readings in turns").
     pub turn_readings: bool,
+    /// Watch the sonar while a FORWARD runs: a range that holds while the wheels drive means the
+    /// body is stuck and the wheels slip; Carto stops, corrects its position by the sonar, answers
+    /// `SET_OBSTACLE_POSITION` and drives back (`pilot/stall.rs`).
+    pub stall_watch: bool,
     /// How long before a distance frame arrives its reading was measured, on average: half the
     /// HC-SR04's measuring cycle (the board sends the latest result). Places readings taken in
     /// turns.
@@ -201,6 +205,7 @@ impl Default for CartoConfig {
             distance_max_age: Duration::from_millis(300),
             scan_deg: 0.0,
             turn_readings: true,
+            stall_watch: true,
             sonar_lag: Duration::from_millis(30),
             body_length_m: 0.26,
             body_width_m: 0.24,

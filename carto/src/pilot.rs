@@ -30,6 +30,9 @@
 //! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
+//! - A FORWARD whose sonar range holds while the wheels drive is stalled (`pilot/stall.rs`,
+//!   [`CartoConfig::stall_watch`]): it is stopped, the odometry takes the sonar's word, and it
+//!   ends as after the bumper (`SET_OBSTACLE_POSITION(cell ahead)`, back-off, `MOVE_DONE`).
 //!
 //! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP, a disconnect or a lost
 //! board link ([`Pilot::on_link_lost`]) drops it;
@@ -65,8 +68,10 @@ use robot_model::grid::{GridPose, Heading, Move};
 
 mod commands;
 mod safety;
+mod stall;
 
 use safety::Safety;
+pub use stall::{Stall, StallWatch};
 
 /// A request from Cute, in Carto's terms. A command or direction byte that is not a move or a
 /// heading is kept raw (`Err(byte)`) so it can be counted and reported.
@@ -162,6 +167,8 @@ pub struct PilotCounters {
     pub turns_undone: u64,
     /// Sonar readings kept while a turn ran (`pilot/safety.rs`, "Readings in turns").
     pub turn_readings: u64,
+    /// FORWARDs stopped because the range held while the wheels drove (`pilot/stall.rs`).
+    pub stalls: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -187,7 +194,7 @@ enum Stage {
     Checking { since: Instant },
     /// A move runs on the motor controller.
     Moving { kind: Move, since: Instant },
-    /// Driving back after a bumper hit.
+    /// Driving back after a bumper hit or a stalled FORWARD.
     BackingOff,
     /// The sonar scan before a FORWARD: look number `look` of [`Safety::looks`] runs.
     Looking { look: usize },
@@ -214,7 +221,7 @@ pub enum Activity {
     DrivingForward,
     /// A turn runs.
     Turning,
-    /// Driving back after the bumper.
+    /// Driving back after the bumper or a stalled FORWARD.
     BackingOff,
     /// Turning to one look of the sonar scan, or back.
     ScanLook,
@@ -245,7 +252,7 @@ impl Activity {
             Activity::CheckingAhead => "checking the distance ahead",
             Activity::DrivingForward => "driving forward",
             Activity::Turning => "turning",
-            Activity::BackingOff => "backing off after the bumper",
+            Activity::BackingOff => "backing off after the bumper or a stall",
             Activity::ScanLook => "turning to look (scan)",
             Activity::ScanReading => "reading the sonar (scan)",
             Activity::ShiftingBeforeTurn => "shifting before a turn",
@@ -281,6 +288,12 @@ pub struct Pilot {
     walls: Walls,
     /// When the last reading kept during a turn arrived.
     last_turn_reading: Option<Instant>,
+    /// The echoes of the running FORWARD (`pilot/stall.rs`); `None` when the watch is off.
+    stall_watch: Option<StallWatch>,
+    /// When the last echo the stall watch took arrived.
+    last_stall_reading: Option<Instant>,
+    /// The odometry's offset along the heading when the running FORWARD started, metres.
+    forward_from_m: f64,
 }
 
 impl Pilot {
@@ -305,6 +318,9 @@ impl Pilot {
             last_straight: None,
             walls: Walls::default(),
             last_turn_reading: None,
+            stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m)),
+            last_stall_reading: None,
+            forward_from_m: 0.0,
         }
     }
 
@@ -583,6 +599,12 @@ impl Pilot {
                         self.bumped(now, motor, sensors);
                         continue;
                     }
+                    if kind == Move::Forward
+                        && let Some(stall) = self.watch_forward(since, motor, sensors, us)
+                    {
+                        self.stalled(now, stall, motor, sensors);
+                        continue;
+                    }
                     match motor.take_outcome() {
                         None if motor.is_busy() => return,
                         None => {
@@ -699,6 +721,58 @@ impl Pilot {
         self.counters.bumps += 1;
         tracing::warn!(travelled_m = ?motor.travelled_m(sensors), "bumper pressed during FORWARD: stopped");
         self.report_obstacle();
+        self.back_off_or_end(now, motor, sensors);
+    }
+
+    /// Feeds the newest echo heard since the FORWARD started at `since` to the stall watch,
+    /// paired with how far the wheels had driven when the sonar measured (the odometry carried
+    /// to that moment: encoder counts arrive less often than distance frames).
+    fn watch_forward(
+        &mut self,
+        since: Instant,
+        motor: &Motor,
+        sensors: &SensorState,
+        us: &Ultrasound,
+    ) -> Option<Stall> {
+        let watch = self.stall_watch.as_mut()?;
+        let r = us.latest()?;
+        if r.at < since || self.last_stall_reading.is_some_and(|t| r.at <= t) {
+            return None;
+        }
+        self.last_stall_reading = Some(r.at);
+        if r.value < 0.0 || !r.value.is_finite() {
+            watch.restart(); // no echo: the next may come from another surface
+            return None;
+        }
+        let measured = r.at - motor.config().sonar_lag;
+        let driven_m = motor.cell_offset(measured, sensors).along_m - self.forward_from_m;
+        // a FORWARD drives at most 1½ cells: anything else is a bad extrapolation, not a reading
+        let cell = motor.config().cell_size_m;
+        if !(-0.5 * cell..=2.0 * cell).contains(&driven_m) {
+            return None;
+        }
+        tracing::trace!(driven_m, range_cm = r.value, "echo during a FORWARD");
+        watch.push(driven_m, f64::from(r.value) / 100.0)
+    }
+
+    /// The FORWARD is stalled (`pilot/stall.rs`): stop, take the sonar's word for how far the
+    /// body went, report the cell ahead as blocked and drive back, as after the bumper.
+    fn stalled(&mut self, now: Instant, stall: Stall, motor: &mut Motor, sensors: &SensorState) {
+        motor.stop(now);
+        self.counters.stalls += 1;
+        tracing::warn!(
+            driven_m = stall.driven_m,
+            wheels_m = stall.wheels_m,
+            "FORWARD stalled: the range held while the wheels drove; stopped"
+        );
+        motor.correct_along(stall.driven_m - stall.wheels_m);
+        self.report_obstacle();
+        self.back_off_or_end(now, motor, sensors);
+    }
+
+    /// After a FORWARD stopped short: drive back to the cell it started from (by default), then
+    /// `MOVE_DONE`.
+    fn back_off_or_end(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
         if self.back_off {
             match motor.start_return(now, sensors) {
                 Ok(()) => {

@@ -340,8 +340,16 @@ impl SensorState {
         matches!(self.bumper, Some(b) if b.value)
     }
 
+    /// The latest telemetry's wheel speeds, if recent and possible: a wheel at more than twice
+    /// the motors' top speed is a corrupted frame that passed the motor link's one-byte checksum
+    /// (two bytes changed in one frame: about one frame in 5,000 at `lossy-motor`'s 1 % byte
+    /// errors), and extrapolating with it would throw the odometry metres away.
     fn fresh_rpm(&self, now: Instant, cfg: &CartoConfig) -> Option<[f32; 4]> {
-        self.rpm.filter(|r| now.saturating_since(r.at) <= cfg.telemetry_fresh).map(|r| r.value)
+        let possible = 2.0 * cfg.max_wheel_rpm;
+        self.rpm
+            .filter(|r| now.saturating_since(r.at) <= cfg.telemetry_fresh)
+            .filter(|r| r.value.iter().all(|v| f64::from(v.abs()) <= possible))
+            .map(|r| r.value)
     }
 
     /// Rate of a wheel's count, counts per second: from fresh telemetry, else from its last two
@@ -751,13 +759,19 @@ mod tests {
         assert!(p.iter().all(|c| (c - 250.0).abs() < 1e-6), "{p:?}");
     }
 
-    #[test]
-    fn fresh_telemetry_wins_over_encoder_differences() {
-        let cfg = CartoConfig::default();
+    /// Sensors with all four encoders at 0 at time 0 and nothing else.
+    fn encoders_at_zero() -> SensorState {
         let mut s = SensorState::default();
         for w in 0..4 {
             s.ingest(ms(0), SensorEvent::Encoder { wheel: w, count: 0 });
         }
+        s
+    }
+
+    #[test]
+    fn fresh_telemetry_wins_over_encoder_differences() {
+        let cfg = CartoConfig::default();
+        let mut s = encoders_at_zero();
         s.ingest(ms(50), SensorEvent::WheelRpm { rpm: [60.0; 4] });
         let rate = s.wheel_rate_cps(0, ms(100), &cfg);
         assert!((rate - cfg.encoder_counts_per_wheel_rev).abs() < 1e-6);
@@ -766,6 +780,21 @@ mod tests {
         // pure rotation: FR/RR forward, FL/RL backward → counter-clockwise
         s.ingest(ms(1000), SensorEvent::WheelRpm { rpm: [-60.0, 60.0, -60.0, 60.0] });
         assert!(s.yaw_rate_dps(ms(1000), &cfg) > 0.0);
+    }
+
+    #[test]
+    fn telemetry_faster_than_the_motors_can_turn_is_not_used() {
+        // lossy-motor seed 16: a frame with two corrupted bytes passed the one-byte checksum
+        // and carried the odometry 75 m back in one extrapolation
+        let cfg = CartoConfig::default();
+        let mut s = encoders_at_zero();
+        let top = cfg.max_wheel_rpm as f32;
+        s.ingest(ms(50), SensorEvent::WheelRpm { rpm: [60.0, 60.0, -1.0e6, 60.0] });
+        assert_eq!(s.wheel_rate_cps(0, ms(100), &cfg), 0.0, "the encoders' rate (none yet) is used");
+        assert_eq!(s.yaw_rate_dps(ms(100), &cfg), 0.0);
+        // the motors at full speed, or pushed a little past it, are believed
+        s.ingest(ms(100), SensorEvent::WheelRpm { rpm: [1.5 * top; 4] });
+        assert!(s.wheel_rate_cps(0, ms(120), &cfg) > 0.0);
     }
 
     #[test]

@@ -267,3 +267,53 @@ fn echoes_heard_in_a_turn_serve_only_the_forward_after_it() {
     assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
     assert_eq!(forward_without_echo(&mut h), DROVE_SOUTH);
 }
+
+/// The stall watch on, telemetry flowing (the odometry is carried between encoder frames with
+/// it, as on the real board) and a wall 1 m ahead of the front face whose range follows the
+/// body, until the FORWARD ends; the replies to it.
+fn forward_with_stall_watch(pinned_after_m: Option<f64>, watch: bool) -> (Harness, Vec<GuiMessage>) {
+    let mut h = ready_with(CartoConfig { stall_watch: watch, ..fake::test_config() });
+    h.robot.send_telemetry = true;
+    let wall_cm = 100.0;
+    h.robot.distance_cm = wall_cm;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    for _ in 0..8000 {
+        if h.move_done_count() == 1 {
+            break;
+        }
+        if pinned_after_m.is_some_and(|m| h.robot.x >= m) {
+            h.robot.pinned = true;
+        }
+        h.robot.distance_cm = wall_cm - (h.robot.x * 100.0) as f32;
+        h.tick();
+    }
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE");
+    let replies = h.reply_msgs();
+    (h, replies)
+}
+
+#[test]
+fn a_forward_towards_a_wall_is_not_taken_for_a_stall() {
+    let (h, replies) = forward_with_stall_watch(None, true);
+    assert_eq!(replies, vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().stalls, 0);
+    assert!((h.robot.x - 0.30).abs() <= 0.015, "ended at {:.3} m", h.robot.x);
+}
+
+#[test]
+fn a_forward_whose_range_holds_while_the_wheels_turn_is_stopped_and_reported() {
+    // the body is held after 5 cm; its wheels spin on and count
+    let (h, replies) = forward_with_stall_watch(Some(0.05), true);
+    assert_eq!(replies, vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().stalls, 1);
+    assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)), "the stored cell moved");
+    // Carto took the sonar's word: it believes the body a few cm from where it stopped (the
+    // back-off then drove the wheels back by that much; the pinned body stayed)
+    let off = h.carto.status().cell_offset.along_m;
+    assert!(off.abs() <= 0.03, "believed {off:.3} m from the centre after the back-off");
+    // control: without the watch the wheels' count wins and Carto reports a cell it never reached
+    let (h, replies) = forward_with_stall_watch(Some(0.05), false);
+    assert_eq!(replies, vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert!(h.robot.x < 0.06, "the fake body moved");
+}

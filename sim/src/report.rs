@@ -141,7 +141,7 @@ pub enum ContactCause {
     /// A turn where the truth allows one at the centre: the robot was off it, by a localisation
     /// error or by Carto's own shift before the turn (see [`FirstContact::belief_error_m`]).
     TurnOffCentre,
-    /// Driving back after the bumper.
+    /// Driving back after the bumper or a stalled FORWARD.
     BackingOff,
     /// Anything else (between commands, idle, a FORWARD without a stored pose).
     Other,
@@ -179,7 +179,7 @@ impl ContactCause {
             ContactCause::TurnOffCentre => {
                 "turn in a cell where the truth allows one at the centre (off it: localisation or Carto's shift)"
             }
-            ContactCause::BackingOff => "backing off after the bumper",
+            ContactCause::BackingOff => "backing off after the bumper or a stall",
             ContactCause::Other => "other",
         }
     }

@@ -260,7 +260,12 @@ impl Lockstep {
         );
 
         // 3. Carto.
+        let logging = tracing::enabled!(tracing::Level::DEBUG);
+        let stalls = if logging { self.carto.carto().stats().stalls } else { 0 };
         self.carto.step(now);
+        if logging && self.carto.carto().stats().stalls != stalls {
+            self.note_stall(now);
+        }
 
         // 4. Cute and the operator.
         let operator = &mut self.operator;
@@ -316,6 +321,31 @@ impl Lockstep {
             }
         }
         !self.is_finished()
+    }
+
+    /// A debug line when Carto stops a FORWARD as stalled (`carto::pilot::stall`): where the
+    /// robot really is and how far from it Carto's belief, corrected by the sonar, now lies.
+    fn note_stall(&self, now: Instant) {
+        let p = self.twin.body().pose();
+        let believed = self.carto.carto().believed_pose();
+        let belief_error_m = believed
+            .and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset))
+            .map(|(bx, by)| (p.x - bx).hypot(p.y - by));
+        // how far the body really is from its cell's centre along the heading, and Carto's word
+        let along = believed.and_then(|(pose, offset)| {
+            let (cx, cy) = carto_belief(&self.truth.frame, pose, Default::default())?;
+            let (sin, cos) = pose.heading.world_angle().sin_cos();
+            Some(((p.x - cx) * cos + (p.y - cy) * sin, offset.along_m))
+        });
+        tracing::debug!(
+            t_s = now.as_secs_f64(),
+            x = p.x,
+            y = p.y,
+            ?belief_error_m,
+            true_along_m = along.map(|a| a.0),
+            carto_along_m = along.map(|a| a.1),
+            "Carto stopped a stalled FORWARD"
+        );
     }
 
     /// Notes a new contact: the report's [`FirstContact`], and a debug line for each one with

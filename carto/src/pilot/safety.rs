@@ -372,6 +372,14 @@ impl Pilot {
         }
         // the echoes heard in the turn were for this FORWARD only
         self.turn_echoes.clear();
+        self.forward_from_m = motor.odometry().offset().along_m;
+        if let Some(watch) = self.stall_watch.as_mut() {
+            watch.restart();
+            // the straight reading at rest just taken is the first echo of this FORWARD
+            if let Some(straight) = self.last_straight.filter(|s| Some(s.pose) == self.pose) {
+                watch.push(0.0, straight.range_m);
+            }
+        }
         match motor.start_next_cell(now, sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
             Err(e) => self.fail(now, &e.to_string()),
