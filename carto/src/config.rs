@@ -180,7 +180,8 @@ pub struct CartoConfig {
     pub board_retry_initial: Duration,
     /// Longest wait between two attempts to reopen a board port.
     pub board_retry_max: Duration,
-    /// After the bumper stops a FORWARD, drive back to the cell the move started from.
+    /// After the bumper, or the stall watch, stops a FORWARD, drive back to the cell the move
+    /// started from.
     pub back_off_after_bump: bool,
     /// Checksums accepted on the motor board's frames (what its firmware emits).
     pub motor_checksum: ChecksumPolicy,

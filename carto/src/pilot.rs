@@ -71,7 +71,7 @@ mod safety;
 mod stall;
 
 use safety::Safety;
-pub use stall::{Stall, StallWatch};
+use stall::{Stall, StallWatch};
 
 /// A request from Cute, in Carto's terms. A command or direction byte that is not a move or a
 /// heading is kept raw (`Err(byte)`) so it can be counted and reported.
@@ -318,7 +318,10 @@ impl Pilot {
             last_straight: None,
             walls: Walls::default(),
             last_turn_reading: None,
-            stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m)),
+            stall_watch: cfg.stall_watch.then(|| {
+                let cruise_mps = 0.01 * cfg.cruise_pct * cfg.max_wheel_speed_mps();
+                StallWatch::new(cfg.sonar_sigma_m, cruise_mps * cfg.sonar_lag.as_secs_f64())
+            }),
             last_stall_reading: None,
             forward_from_m: 0.0,
         }
@@ -599,7 +602,9 @@ impl Pilot {
                         self.bumped(now, motor, sensors);
                         continue;
                     }
+                    // not on the poll the FORWARD ended: the odometry's origin has moved on
                     if kind == Move::Forward
+                        && motor.is_busy()
                         && let Some(stall) = self.watch_forward(since, motor, sensors, us)
                     {
                         self.stalled(now, stall, motor, sensors);
@@ -663,7 +668,7 @@ impl Pilot {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.end_task(now),
                     Some(Err(e)) => {
-                        tracing::warn!(error = %e, "back-off after the bumper failed");
+                        tracing::warn!(error = %e, "back-off after the bumper or a stall failed");
                         self.end_task(now);
                     }
                 },
@@ -736,7 +741,8 @@ impl Pilot {
     ) -> Option<Stall> {
         let watch = self.stall_watch.as_mut()?;
         let r = us.latest()?;
-        if r.at < since || self.last_stall_reading.is_some_and(|t| r.at <= t) {
+        // the straight reading at rest, taken before `since`, seeded the watch already
+        if r.at <= since || self.last_stall_reading.is_some_and(|t| r.at <= t) {
             return None;
         }
         self.last_stall_reading = Some(r.at);
@@ -746,7 +752,8 @@ impl Pilot {
         }
         let measured = r.at - motor.config().sonar_lag;
         let driven_m = motor.cell_offset(measured, sensors).along_m - self.forward_from_m;
-        // a FORWARD drives at most 1½ cells: anything else is a bad extrapolation, not a reading
+        // a FORWARD drives at most 1½ cells (half a cell of slack either way): anything else is
+        // a bad extrapolation, not a reading
         let cell = motor.config().cell_size_m;
         if !(-0.5 * cell..=2.0 * cell).contains(&driven_m) {
             return None;
@@ -765,7 +772,10 @@ impl Pilot {
             wheels_m = stall.wheels_m,
             "FORWARD stalled: the range held while the wheels drove; stopped"
         );
-        motor.correct_along(stall.driven_m - stall.wheels_m);
+        // the wheels went on after that echo while the body stood: the odometry now says where
+        // the sonar put the body
+        let now_m = motor.cell_offset(now, sensors).along_m;
+        motor.correct_along(self.forward_from_m + stall.driven_m - now_m);
         self.report_obstacle();
         self.back_off_or_end(now, motor, sensors);
     }

@@ -268,35 +268,40 @@ fn echoes_heard_in_a_turn_serve_only_the_forward_after_it() {
     assert_eq!(forward_without_echo(&mut h), DROVE_SOUTH);
 }
 
-/// The stall watch on, telemetry flowing (the odometry is carried between encoder frames with
-/// it, as on the real board) and a wall 1 m ahead of the front face whose range follows the
-/// body, until the FORWARD ends; the replies to it.
-fn forward_with_stall_watch(pinned_after_m: Option<f64>, watch: bool) -> (Harness, Vec<GuiMessage>) {
+/// The stall watch on or off, telemetry flowing (the odometry is carried between encoder frames
+/// with it, as on the real board) and a wall 1 m ahead of the front face whose range follows the
+/// body. `forwards` FORWARDs are asked for (one cartography move, or a trajectory batch); the
+/// body is held once it is `pinned_after_m` along, its wheels spinning on, and let go once Carto
+/// has seen the stall, so the back-off moves it. Runs until the task's MOVE_DONE.
+fn forwards_with_stall_watch(forwards: u8, pinned_after_m: Option<f64>, watch: bool) -> Harness {
     let mut h = ready_with(CartoConfig { stall_watch: watch, ..fake::test_config() });
     h.robot.send_telemetry = true;
     let wall_cm = 100.0;
     h.robot.distance_cm = wall_cm;
     h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    for _ in 0..8000 {
+    if forwards == 1 {
+        h.send(cartography(Command::Forward));
+    } else {
+        for _ in 0..forwards {
+            h.send(GuiMessage::SendMovesTrajectory { n_total: forwards, command: Command::Forward });
+        }
+    }
+    for _ in 0..20_000 {
         if h.move_done_count() == 1 {
             break;
         }
-        if pinned_after_m.is_some_and(|m| h.robot.x >= m) {
-            h.robot.pinned = true;
-        }
+        h.robot.pinned = pinned_after_m.is_some_and(|m| h.robot.x >= m) && h.carto.stats().stalls == 0;
         h.robot.distance_cm = wall_cm - (h.robot.x * 100.0) as f32;
         h.tick();
     }
     assert_eq!(h.move_done_count(), 1, "no MOVE_DONE");
-    let replies = h.reply_msgs();
-    (h, replies)
+    h
 }
 
 #[test]
 fn a_forward_towards_a_wall_is_not_taken_for_a_stall() {
-    let (h, replies) = forward_with_stall_watch(None, true);
-    assert_eq!(replies, vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let h = forwards_with_stall_watch(1, None, true);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     assert_eq!(h.carto.stats().stalls, 0);
     assert!((h.robot.x - 0.30).abs() <= 0.015, "ended at {:.3} m", h.robot.x);
 }
@@ -304,16 +309,25 @@ fn a_forward_towards_a_wall_is_not_taken_for_a_stall() {
 #[test]
 fn a_forward_whose_range_holds_while_the_wheels_turn_is_stopped_and_reported() {
     // the body is held after 5 cm; its wheels spin on and count
-    let (h, replies) = forward_with_stall_watch(Some(0.05), true);
-    assert_eq!(replies, vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let h = forwards_with_stall_watch(1, Some(0.05), true);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     assert_eq!(h.carto.stats().stalls, 1);
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)), "the stored cell moved");
-    // Carto took the sonar's word: it believes the body a few cm from where it stopped (the
-    // back-off then drove the wheels back by that much; the pinned body stayed)
-    let off = h.carto.status().cell_offset.along_m;
-    assert!(off.abs() <= 0.03, "believed {off:.3} m from the centre after the back-off");
+    // Carto took the sonar's word for where the body stood (5 cm along, not the wheels' 20 cm or
+    // more), so the back-off brought the body, let go, back to the centre; a correction left out
+    // or of the wrong sign sends it 15 cm or more behind
+    assert!(h.robot.x.abs() <= 0.03, "the body ended {:.3} m from the centre", h.robot.x);
     // control: without the watch the wheels' count wins and Carto reports a cell it never reached
-    let (h, replies) = forward_with_stall_watch(Some(0.05), false);
-    assert_eq!(replies, vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let h = forwards_with_stall_watch(1, Some(0.05), false);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     assert!(h.robot.x < 0.06, "the fake body moved");
+}
+
+#[test]
+fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
+    let h = forwards_with_stall_watch(3, Some(0.05), true);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().stalls, 1);
+    // neither did the rest of the batch run, nor did the back-off miss the centre
+    assert!(h.robot.x.abs() <= 0.03, "the body ended {:.3} m from the centre", h.robot.x);
 }

@@ -323,7 +323,7 @@ impl Lockstep {
         !self.is_finished()
     }
 
-    /// A debug line when Carto stops a FORWARD as stalled (`carto::pilot::stall`): where the
+    /// A debug line when Carto stops a FORWARD as stalled (`carto/src/pilot/stall.rs`): where the
     /// robot really is and how far from it Carto's belief, corrected by the sonar, now lies.
     fn note_stall(&self, now: Instant) {
         let p = self.twin.body().pose();

@@ -15,13 +15,18 @@ use sim::report::Report;
 use sim::runner::Lockstep;
 use sim::scenario::LoadedScenario;
 
-fn run(style: RoomStyle, seed: u64) -> Report {
+/// The generated room run to its end.
+fn run_room(style: RoomStyle, seed: u64) -> Lockstep {
     let room = generate(style, seed).unwrap();
     let loaded =
         LoadedScenario::from_ron_str(&room.to_ron(), "generated.ron", std::path::Path::new(".")).unwrap();
     let mut run = Lockstep::new(loaded, None).unwrap();
     run.run_to_end(|_| {});
-    run.report(1.0)
+    run
+}
+
+fn run(style: RoomStyle, seed: u64) -> Report {
+    run_room(style, seed).report(1.0)
 }
 
 #[test]
@@ -76,15 +81,11 @@ fn a_point_under_the_body_does_not_make_carto_refuse_every_turn() {
 /// grid, which the sonar does not hear; the body stops against it, pinned, while the wheels spin
 /// on. By the wheels Carto drove four cells north and told Cute so, and the run ended after 32 s
 /// with 7 % of the room mapped and Cute's robot 1.6 m from the real one. The sonar's range held
-/// while the wheels drove (`carto::pilot::stall`): Carto now stops, reports the cell ahead as
+/// while the wheels drove (`carto/src/pilot/stall.rs`): Carto now stops, reports the cell ahead as
 /// blocked and drives back, and the room is mapped.
 #[test]
 fn a_forward_pinned_against_an_unseen_box_is_stopped_and_the_room_still_mapped() {
-    let room = generate(RoomStyle::Irregular, 9).unwrap();
-    let loaded =
-        LoadedScenario::from_ron_str(&room.to_ron(), "generated.ron", std::path::Path::new(".")).unwrap();
-    let mut run = Lockstep::new(loaded, None).unwrap();
-    run.run_to_end(|_| {});
+    let run = run_room(RoomStyle::Irregular, 9);
     let stalls = run.carto().stats().stalls;
     let r = run.report(1.0);
     println!(

@@ -304,7 +304,6 @@ pub struct Harness {
 
 /// The default controller on 0.30 m cells with a 30 cm obstacle threshold: the grid these
 /// tests were written for (the distances they assert are multiples of it).
-#[allow(dead_code)]
 ///
 /// The stall watch is off: the fake's sonar reads the scripted `distance_cm` however the body
 /// moves, which is what a stalled FORWARD looks like. The stall tests turn it on and move the
