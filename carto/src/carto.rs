@@ -82,6 +82,8 @@ pub struct CartoStats {
     pub wall_fixes: u64,
     /// Sonar readings kept while a turn ran (near its end, close echoes only).
     pub turn_readings: u64,
+    /// Sonar readings kept while a FORWARD drove.
+    pub drive_readings: u64,
     /// FORWARDs stopped because the range held while the wheels drove.
     pub stalls: u64,
     /// Times the sensor board was declared lost.
@@ -471,6 +473,7 @@ impl Carto {
             turns_refused: p.turns_refused,
             turns_undone: p.turns_undone,
             turn_readings: p.turn_readings,
+            drive_readings: p.drive_readings,
             stalls: p.stalls,
             wall_fixes: p.wall_fixes,
             ..self.stats

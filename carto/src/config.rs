@@ -55,6 +55,10 @@ pub struct CartoConfig {
     /// echo points placed from the heading the IMU had when the sonar measured, for the corridor
     /// check of the FORWARD right after the turn (`pilot/safety.rs`, "Readings in turns").
     pub turn_readings: bool,
+    /// Keep the sonar's readings taken while a FORWARD drives, each on the edge of the cone
+    /// farther from the row's line, for the corridor check of the next FORWARD: from farther back
+    /// the cone covers the body's width (`pilot/safety.rs`, "Readings while driving").
+    pub drive_readings: bool,
     /// Watch the sonar while a FORWARD runs: a range that holds while the wheels drive means the
     /// body is stuck and the wheels slip; Carto stops, corrects its position by the sonar, answers
     /// `SET_OBSTACLE_POSITION` and drives back (`pilot/stall.rs`).
@@ -206,6 +210,7 @@ impl Default for CartoConfig {
             distance_max_age: Duration::from_millis(300),
             scan_deg: 0.0,
             turn_readings: true,
+            drive_readings: true,
             stall_watch: true,
             sonar_lag: Duration::from_millis(30),
             body_length_m: 0.26,
@@ -314,6 +319,13 @@ impl CartoConfig {
     /// Wheel rim speed at 100 % drive, m/s.
     pub fn max_wheel_speed_mps(&self) -> f64 {
         self.max_wheel_rpm / 60.0 * 2.0 * core::f64::consts::PI * self.wheel_radius_m
+    }
+
+    /// How far a FORWARD at cruise speed drives in the sonar's mean lag, metres: how far off a
+    /// reading taken while driving can be placed along the track (the frame carries a result
+    /// measured up to twice the mean lag before it).
+    pub fn drive_timing_m(&self) -> f64 {
+        0.01 * self.cruise_pct * self.max_wheel_speed_mps() * self.sonar_lag.as_secs_f64()
     }
 
     /// Radius of the circle the body sweeps turning on the spot (half its diagonal), metres.

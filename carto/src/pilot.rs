@@ -60,7 +60,7 @@ use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
 use crate::motor::Motor;
-use crate::sensors::SensorState;
+use crate::sensors::{SensorState, Stamped};
 use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
 use crate::walls::Walls;
@@ -167,6 +167,8 @@ pub struct PilotCounters {
     pub turns_undone: u64,
     /// Sonar readings kept while a turn ran (`pilot/safety.rs`, "Readings in turns").
     pub turn_readings: u64,
+    /// Sonar readings kept while a FORWARD drove (`pilot/safety.rs`, "Readings while driving").
+    pub drive_readings: u64,
     /// FORWARDs stopped because the range held while the wheels drove (`pilot/stall.rs`).
     pub stalls: u64,
 }
@@ -277,9 +279,10 @@ pub struct Pilot {
     counters: PilotCounters,
     safety: Safety,
     surroundings: Surroundings,
-    /// Echoes heard while the last turn ran (`pilot/safety.rs`, "Readings in turns"): only the
-    /// corridor check of the FORWARD right after it asks them.
-    turn_echoes: Surroundings,
+    /// Echoes heard while the robot moved (the last turn, or the last FORWARD), each kept on the
+    /// cone's edge farther from the line of the next FORWARD (`pilot/safety.rs`, "Readings in
+    /// turns", "Readings while driving"): only that FORWARD's corridor check asks them.
+    edge_echoes: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,
     /// The last straight reading at rest, for the along-track fix of the next one.
@@ -290,8 +293,8 @@ pub struct Pilot {
     last_turn_reading: Option<Instant>,
     /// The echoes of the running FORWARD (`pilot/stall.rs`); `None` when the watch is off.
     stall_watch: Option<StallWatch>,
-    /// When the last echo the stall watch took arrived.
-    last_stall_reading: Option<Instant>,
+    /// When the last reading taken while a FORWARD drove arrived.
+    last_drive_reading: Option<Instant>,
     /// The odometry's offset along the heading when the running FORWARD started, metres.
     forward_from_m: f64,
 }
@@ -313,16 +316,13 @@ impl Pilot {
             counters: PilotCounters::default(),
             safety: Safety::new(cfg),
             surroundings: Surroundings::default(),
-            turn_echoes: Surroundings::default(),
+            edge_echoes: Surroundings::default(),
             scan_missing: false,
             last_straight: None,
             walls: Walls::default(),
             last_turn_reading: None,
-            stall_watch: cfg.stall_watch.then(|| {
-                let cruise_mps = 0.01 * cfg.cruise_pct * cfg.max_wheel_speed_mps();
-                StallWatch::new(cfg.sonar_sigma_m, cruise_mps * cfg.sonar_lag.as_secs_f64())
-            }),
-            last_stall_reading: None,
+            stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m, cfg.drive_timing_m())),
+            last_drive_reading: None,
             forward_from_m: 0.0,
         }
     }
@@ -605,10 +605,13 @@ impl Pilot {
                     // not on the poll the FORWARD ended: the odometry's origin has moved on
                     if kind == Move::Forward
                         && motor.is_busy()
-                        && let Some(stall) = self.watch_forward(since, motor, sensors, us)
+                        && let Some(r) = self.new_drive_reading(since, us)
                     {
-                        self.stalled(now, stall, motor, sensors);
-                        continue;
+                        self.note_drive_reading(r, motor, sensors);
+                        if let Some(stall) = self.watch_forward(r, motor, sensors) {
+                            self.stalled(now, stall, motor, sensors);
+                            continue;
+                        }
                     }
                     match motor.take_outcome() {
                         None if motor.is_busy() => return,
@@ -729,23 +732,22 @@ impl Pilot {
         self.back_off_or_end(now, motor, sensors);
     }
 
-    /// Feeds the newest echo heard since the FORWARD started at `since` to the stall watch,
-    /// paired with how far the wheels had driven when the sonar measured (the odometry carried
-    /// to that moment: encoder counts arrive less often than distance frames).
-    fn watch_forward(
-        &mut self,
-        since: Instant,
-        motor: &Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
-    ) -> Option<Stall> {
-        let watch = self.stall_watch.as_mut()?;
+    /// The newest reading if it arrived after the FORWARD started at `since` and was not taken
+    /// on an earlier poll (the straight reading at rest, taken before `since`, is not one).
+    fn new_drive_reading(&mut self, since: Instant, us: &Ultrasound) -> Option<Stamped<f32>> {
         let r = us.latest()?;
-        // the straight reading at rest, taken before `since`, seeded the watch already
-        if r.at <= since || self.last_stall_reading.is_some_and(|t| r.at <= t) {
+        if r.at <= since || self.last_drive_reading.is_some_and(|t| r.at <= t) {
             return None;
         }
-        self.last_stall_reading = Some(r.at);
+        self.last_drive_reading = Some(r.at);
+        Some(r)
+    }
+
+    /// Feeds the reading `r`, taken while a FORWARD drives, to the stall watch, paired with how
+    /// far the wheels had driven when the sonar measured (the odometry carried to that moment:
+    /// encoder counts arrive less often than distance frames).
+    fn watch_forward(&mut self, r: Stamped<f32>, motor: &Motor, sensors: &SensorState) -> Option<Stall> {
+        let watch = self.stall_watch.as_mut()?;
         if r.value < 0.0 || !r.value.is_finite() {
             watch.restart(); // no echo: the next may come from another surface
             return None;

@@ -331,3 +331,53 @@ fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
     // neither did the rest of the batch run, nor did the back-off miss the centre
     assert!(h.robot.x.abs() <= 0.03, "the body ended {:.3} m from the centre", h.robot.x);
 }
+
+/// Two FORWARDs east from the start cell's centre, with readings while driving on or off. While
+/// the first FORWARD has driven 2–20 cm the sonar hears a post `post_m` ahead of the start
+/// cell's centre (at rest, before and after, it reads no echo: a leg the cone holds only from
+/// farther back). The replies to the second FORWARD, and how many readings Carto kept while
+/// driving.
+fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMessage>, u64) {
+    let mut h = ready_with(CartoConfig { drive_readings, ..fake::test_config() });
+    h.robot.send_telemetry = true;
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    for _ in 0..8000 {
+        let heard = (0.02..=0.20).contains(&h.robot.x);
+        h.robot.distance_cm = if heard { ((post_m - h.robot.x - 0.13) * 100.0) as f32 } else { -1.0 };
+        h.tick();
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the second FORWARD");
+    (h.reply_msgs(), h.carto.stats().drive_readings)
+}
+
+#[test]
+fn a_post_heard_while_driving_blocks_the_next_forward() {
+    // 0.55 m from the start: 0.25 m past the next cell's centre, in the second FORWARD's path
+    // (its front face reaches 0.43 m past that centre); heard 35–53 cm from the sonar, where the
+    // cone is at most 14 cm wide, so the whole arc lies in the path
+    let (seen, kept) = second_forward_after_hearing(true, 0.55);
+    assert!(kept >= 1, "no reading kept while driving");
+    assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+    // without the readings while driving only the "no echo" at rest counts, and the robot drives
+    let (blind, kept) = second_forward_after_hearing(false, 0.55);
+    assert_eq!(kept, 0);
+    assert_eq!(blind, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+}
+
+#[test]
+fn a_post_heard_while_driving_beyond_the_next_forward_does_not_block_it() {
+    // 0.85 m from the start: 12 cm past where the second FORWARD's front face stops
+    let (seen, kept) = second_forward_after_hearing(true, 0.85);
+    assert!(kept >= 1, "no reading kept while driving");
+    assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+}

@@ -261,10 +261,16 @@ impl Lockstep {
 
         // 3. Carto.
         let logging = tracing::enabled!(tracing::Level::DEBUG);
-        let stalls = if logging { self.carto.carto().stats().stalls } else { 0 };
+        let before = logging.then(|| self.carto.carto().stats());
         self.carto.step(now);
-        if logging && self.carto.carto().stats().stalls != stalls {
-            self.note_stall(now);
+        if let Some(before) = before {
+            let after = self.carto.carto().stats();
+            if after.stalls != before.stalls {
+                self.note_stall(now);
+            }
+            if after.obstacles != before.obstacles {
+                self.note_obstacle_report(now);
+            }
         }
 
         // 4. Cute and the operator.
@@ -345,6 +351,26 @@ impl Lockstep {
             true_along_m = along.map(|a| a.0),
             carto_along_m = along.map(|a| a.1),
             "Carto stopped a stalled FORWARD"
+        );
+    }
+
+    /// A debug line for each cell Carto reports blocked (`SET_OBSTACLE_POSITION`): what the truth
+    /// says of the move it refused, so that blocks of free moves can be counted.
+    fn note_obstacle_report(&self, now: Instant) {
+        let p = self.twin.body().pose();
+        let Some((pose, _)) = self.carto.carto().believed_pose() else { return };
+        let Some((r, c)) = pose.ahead() else { return };
+        let from = (usize::from(pose.x), usize::from(pose.y));
+        let to = (usize::from(r), usize::from(c));
+        tracing::debug!(
+            t_s = now.as_secs_f64(),
+            x = p.x,
+            y = p.y,
+            ?from,
+            ?to,
+            true_cell = ?self.twin.cell(),
+            move_exists = self.truth.can_move(from, to),
+            "Carto reported the cell ahead blocked"
         );
     }
 

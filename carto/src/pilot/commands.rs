@@ -71,7 +71,7 @@ impl Pilot {
 
     pub(super) fn start_turn(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
         // the echoes of an earlier turn were for the FORWARD after it, on another line
-        self.turn_echoes.clear();
+        self.edge_echoes.clear();
         match motor.start_turn(now, mv == Move::Right, sensors) {
             Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },
             Err(e) => self.fail(now, &e.to_string()),

@@ -50,11 +50,26 @@
 //!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`],
 //!   half its cycle, before the frame arrived; carried at most
 //!   [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it
-//!   is kept on the cone's edge farther from the line of the next FORWARD, so it blocks that
+//!   is kept on the cone's edge farther from the line of the next FORWARD ([`FAR_SIGMAS`] sonar
+//!   σ beyond its range), so it blocks that
 //!   FORWARD only when the whole arc lies in the body's path. These points feed only the corridor check, never
 //!   the turn check: a turn would shift away from an echo whose position is this uncertain.
 //!   Readings at rest clear them as they clear the others. Measured in the README ("Safety
 //!   checks"): on central rays, or over wider windows, they blocked moves that were free.
+//! - **Readings while driving.** The sonar keeps measuring while a FORWARD drives, and from
+//!   farther back its cone is wider: at 0.9 m it spans 24 cm, about the body's width, where at
+//!   rest in the next cell it spans 6 cm. Every echo heard while a FORWARD drives is kept
+//!   ([`CartoConfig::drive_readings`]), placed from where the odometry, carried to when the
+//!   sonar measured, says the robot was, on the cone's edge farther from the row's line as a
+//!   reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`] sonar σ (the closest
+//!   of the ten readings a second of a wall just past the corridor's end would otherwise fall
+//!   inside it) plus the distance the robot drives in the sonar's lag
+//!   ([`CartoConfig::drive_timing_m`]: the frame carries a result up to twice the mean lag
+//!   old). They feed the corridor check of the next FORWARD only, as the readings in turns do,
+//!   and are forgotten when it starts or a turn does: a chair leg or a box corner beside the
+//!   next cell's path, outside the cone from the cell the robot stops in, blocks that FORWARD.
+//!   With 0.45 m cells an echo whose along-track place lies in the next corridor was heard from
+//!   at most 0.9 m, where the whole arc lies in the body's path.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
@@ -65,7 +80,8 @@ use robot_model::time::Instant;
 use super::{Pilot, Stage};
 use crate::CartoConfig;
 use crate::motor::Motor;
-use crate::sensors::SensorState;
+use crate::odometry::CellOffset;
+use crate::sensors::{SensorState, Stamped};
 use crate::surroundings::Pose2;
 use crate::ultrasound::Ultrasound;
 
@@ -76,6 +92,8 @@ pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
 /// degrees: they look beside the path of the FORWARD that may follow.
 const TURN_READING_WINDOW_DEG: f64 = 20.0;
+/// An echo heard while moving is kept this many sonar σ beyond its range.
+const FAR_SIGMAS: f64 = 3.0;
 /// A larger disagreement between sonar and wheels means two different objects answered, metres.
 pub const ALONG_FIX_MAX_ERROR_M: f64 = 0.05;
 /// Echoes further than this are not kept as walls nor matched with them, metres (the cone is
@@ -112,8 +130,14 @@ pub(super) struct Safety {
     strafe_shifts: bool,
     /// Keep the readings taken while a turn runs.
     turn_readings: bool,
+    /// Keep the readings taken while a FORWARD drives.
+    drive_readings: bool,
     /// How long before its frame arrives a reading was measured.
     sonar_lag_s: f64,
+    /// One reading's noise, metres.
+    sonar_sigma_m: f64,
+    /// [`CartoConfig::drive_timing_m`].
+    drive_timing_m: f64,
 }
 
 impl Safety {
@@ -139,7 +163,10 @@ impl Safety {
             safe_turns: cfg.safe_turns,
             strafe_shifts: cfg.strafe_shifts,
             turn_readings: cfg.turn_readings,
+            drive_readings: cfg.drive_readings,
             sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
+            sonar_sigma_m: cfg.sonar_sigma_m,
+            drive_timing_m: cfg.drive_timing_m(),
         }
     }
 
@@ -165,6 +192,12 @@ impl Pilot {
     /// cell's centre, plus the odometry's offset, facing the grid heading plus the IMU's offset
     /// from the reference heading. `None` without a pose from Cute.
     pub(super) fn believed(&self, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
+        self.believed_with(motor.odometry().offset(), motor, sensors)
+    }
+
+    /// [`Self::believed`] with the odometry's offset `off` from the stored cell's centre (carried
+    /// to another moment).
+    fn believed_with(&self, off: CellOffset, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
         let GridPose { x: row, y: col, heading } = self.pose?;
         let nominal = heading_deg(heading);
         let centre = Pose2 {
@@ -172,7 +205,6 @@ impl Pilot {
             y: -f64::from(row) * self.safety.cell_m,
             yaw_deg: nominal,
         };
-        let off = motor.odometry().offset();
         let (x, y) = centre.offset(off.along_m, off.left_m);
         let turned = match (motor.reference_deg(), sensors.yaw_deg()) {
             (Some(reference), Some(yaw)) => yaw.value - reference,
@@ -230,9 +262,9 @@ impl Pilot {
             let range = cm.map(|cm| f64::from(cm) / 100.0);
             self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
             self.surroundings.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
-            self.turn_echoes.clear_footprint(robot, s.half_length_m, s.half_width_m);
+            self.edge_echoes.clear_footprint(robot, s.half_length_m, s.half_width_m);
             if let Some(range) = range {
-                self.turn_echoes.clear_seen_through(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
+                self.edge_echoes.clear_seen_through(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
             }
         }
     }
@@ -240,7 +272,7 @@ impl Pilot {
     /// Forgets every echo point (a new pose from Cute, or none: they were placed from another).
     pub(super) fn forget_surroundings(&mut self) {
         self.surroundings.clear();
-        self.turn_echoes.clear();
+        self.edge_echoes.clear();
     }
 
     /// Keeps the newest reading if it arrived while the turn `turn`, started at `since`, runs
@@ -288,18 +320,53 @@ impl Pilot {
         if crate::sensors::wrap180(robot.yaw_deg - target).abs() > TURN_READING_WINDOW_DEG {
             return;
         }
-        // The echo may come from anywhere across the cone: it is kept on the cone's edge farther
-        // from the line the next FORWARD would drive, so that it blocks that FORWARD only when
-        // the whole arc lies in the body's path.
-        let ahead = Pose2 { yaw_deg: target, ..robot };
-        let (sx, sy) = robot.offset(s.mount_m, 0.0);
-        let edge = |side: f64| Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg + side * s.half_cone_deg };
-        let beside_path = |edge: Pose2| ahead.local(edge.offset(range, 0.0)).1.abs();
-        let (right, left) = (edge(-1.0), edge(1.0));
-        let farther = if beside_path(right) >= beside_path(left) { right } else { left };
         tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
         self.counters.turn_readings += 1;
-        self.turn_echoes.add_echo(farther, 0.0, range);
+        self.keep_on_far_edge(robot, target, range);
+    }
+
+    /// Keeps the reading `r`, taken while a FORWARD drives (module docs, "Readings while
+    /// driving"), placed from where the odometry says the robot was when the sonar measured.
+    pub(super) fn note_drive_reading(&mut self, r: Stamped<f32>, motor: &Motor, sensors: &SensorState) {
+        let s = self.safety;
+        let range = f64::from(r.value) / 100.0;
+        if !s.drive_readings || !(0.0..=s.max_range_m).contains(&range) {
+            return;
+        }
+        let Some(pose) = self.pose else { return };
+        let measured = r.at - motor.config().sonar_lag;
+        let Some(robot) = self.believed_with(motor.cell_offset(measured, sensors), motor, sensors) else {
+            return;
+        };
+        tracing::trace!(
+            x = robot.x,
+            y = robot.y,
+            yaw = robot.yaw_deg,
+            range,
+            "reading kept during a FORWARD"
+        );
+        self.counters.drive_readings += 1;
+        // the frame carries a result measured up to twice the mean lag before it: the body may
+        // have been this much farther back
+        self.keep_on_far_edge(robot, heading_deg(pose.heading), range + s.drive_timing_m);
+    }
+
+    /// Keeps the echo `range` heard from `robot` as a point for the next FORWARD's corridor check,
+    /// on the edge of the cone farther from that FORWARD's line (through `robot`, heading
+    /// `line_deg`). The echo may come from anywhere across the cone: so placed, it blocks the
+    /// FORWARD only when the whole arc lies in the body's path. It is kept [`FAR_SIGMAS`] sonar
+    /// σ beyond its range too: a FORWARD hears ten readings a second, and the closest of many
+    /// noisy readings of a wall just past the corridor's end would otherwise fall inside it.
+    fn keep_on_far_edge(&mut self, robot: Pose2, line_deg: f64, range: f64) {
+        let s = self.safety;
+        let range = range + FAR_SIGMAS * s.sonar_sigma_m;
+        let line = Pose2 { yaw_deg: line_deg, ..robot };
+        let (sx, sy) = robot.offset(s.mount_m, 0.0);
+        let edge = |side: f64| Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg + side * s.half_cone_deg };
+        let beside_line = |edge: Pose2| line.local(edge.offset(range, 0.0)).1.abs();
+        let (right, left) = (edge(-1.0), edge(1.0));
+        let farther = if beside_line(right) >= beside_line(left) { right } else { left };
+        self.edge_echoes.add_echo(farther, 0.0, range);
     }
 
     /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
@@ -359,7 +426,7 @@ impl Pilot {
             let half = s.half_width_m + s.clearance_m;
             let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
             if let Some((a, l)) =
-                known.or_else(|| self.turn_echoes.first_in_corridor(robot, s.mount_m, to, half))
+                known.or_else(|| self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half))
             {
                 tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
                 self.counters.corridor_blocked += 1;
@@ -371,7 +438,7 @@ impl Pilot {
             self.forget_surroundings();
         }
         // the echoes heard in the turn were for this FORWARD only
-        self.turn_echoes.clear();
+        self.edge_echoes.clear();
         self.forward_from_m = motor.odometry().offset().along_m;
         if let Some(watch) = self.stall_watch.as_mut() {
             watch.restart();
