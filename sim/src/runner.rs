@@ -337,12 +337,7 @@ impl Lockstep {
         let belief_error_m = believed
             .and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset))
             .map(|(bx, by)| (p.x - bx).hypot(p.y - by));
-        // how far the body really is from its cell's centre along the heading, and Carto's word
-        let along = believed.and_then(|(pose, offset)| {
-            let (cx, cy) = carto_belief(&self.truth.frame, pose, Default::default())?;
-            let (sin, cos) = pose.heading.world_angle().sin_cos();
-            Some(((p.x - cx) * cos + (p.y - cy) * sin, offset.along_m))
-        });
+        let along = self.along_true_and_believed();
         tracing::debug!(
             t_s = now.as_secs_f64(),
             x = p.x,
@@ -354,6 +349,16 @@ impl Lockstep {
         );
     }
 
+    /// How far the body really is from the centre of the cell Carto believes it is in, along the
+    /// stored heading, and how far Carto believes, metres.
+    fn along_true_and_believed(&self) -> Option<(f32, f64)> {
+        let p = self.twin.body().pose();
+        let (pose, offset) = self.carto.carto().believed_pose()?;
+        let (cx, cy) = carto_belief(&self.truth.frame, pose, Default::default())?;
+        let (sin, cos) = pose.heading.world_angle().sin_cos();
+        Some(((p.x - cx) * cos + (p.y - cy) * sin, offset.along_m))
+    }
+
     /// A debug line for each cell Carto reports blocked (`SET_OBSTACLE_POSITION`): what the truth
     /// says of the move it refused, so that blocks of free moves can be counted.
     fn note_obstacle_report(&self, now: Instant) {
@@ -362,6 +367,7 @@ impl Lockstep {
         let Some((r, c)) = pose.ahead() else { return };
         let from = (usize::from(pose.x), usize::from(pose.y));
         let to = (usize::from(r), usize::from(c));
+        let along = self.along_true_and_believed();
         tracing::debug!(
             t_s = now.as_secs_f64(),
             x = p.x,
@@ -369,6 +375,8 @@ impl Lockstep {
             ?from,
             ?to,
             true_cell = ?self.twin.cell(),
+            true_along_m = along.map(|a| a.0),
+            carto_along_m = along.map(|a| a.1),
             move_exists = self.truth.can_move(from, to),
             "Carto reported the cell ahead blocked"
         );
