@@ -59,6 +59,12 @@ pub struct CartoConfig {
     /// farther from the row's line, for the corridor check of the next FORWARD: from farther back
     /// the cone covers the body's width (`pilot/safety.rs`, "Readings while driving").
     pub drive_readings: bool,
+    /// After each turn the robot turns on past its new heading by this much and back, its sonar
+    /// listening (kept as readings in turns): the end of the turn sweeps the cone across one side
+    /// of the next FORWARD's path, this sweeps it across the other. Degrees; `0` turns it off;
+    /// needs `turn_readings`. Mapping turns only: after a STOP in a trajectory batch Cute cannot
+    /// tell which of its turns were made (README, "Safety checks", "Looking past a turn").
+    pub look_past_turn_deg: f64,
     /// Watch the sonar while a FORWARD runs: a range that holds while the wheels drive means the
     /// body is stuck and the wheels slip; Carto stops, corrects its position by the sonar, answers
     /// `SET_OBSTACLE_POSITION` and drives back (`pilot/stall.rs`).
@@ -211,6 +217,7 @@ impl Default for CartoConfig {
             scan_deg: 0.0,
             turn_readings: true,
             drive_readings: true,
+            look_past_turn_deg: 20.0,
             stall_watch: true,
             sonar_lag: Duration::from_millis(30),
             body_length_m: 0.26,

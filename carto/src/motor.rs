@@ -226,6 +226,9 @@ pub struct Motor {
     /// The reference heading a turn started from, while that turn runs or after it failed
     /// ([`Motor::start_turn_back`]).
     turn_from_deg: Option<f64>,
+    /// A turn or a look was cut short by [`Motor::stop`]: the body may face off the reference
+    /// heading, which still names the grid heading of the stored pose.
+    rotation_cut: bool,
 }
 
 impl Motor {
@@ -245,6 +248,7 @@ impl Motor {
             turn_ended: None,
             zeroed_at: None,
             turn_from_deg: None,
+            rotation_cut: false,
         }
     }
 
@@ -423,10 +427,13 @@ impl Motor {
         {
             // the body may still be rotating: the drift estimate waits as after a finished turn
             self.turn_ended = Some(now);
-            if !m.look && !matches!(m.phase, Phase::Rest { .. }) {
-                // A turn cut short leaves the heading between two grid headings (one still
-                // waiting for rest has not turned yet).
-                self.reference_deg = None;
+            if !matches!(m.phase, Phase::Rest { .. }) {
+                // A turn or a look cut short leaves the body between two grid headings (one still
+                // waiting for rest has not turned yet). The reference stays: the stored pose
+                // keeps the heading the turn started from, and the body faces it again before
+                // the next move (the pilot asks `rotation_was_cut`). Learning the reference from
+                // the IMU instead took the cut angle for the grid heading.
+                self.rotation_cut = true;
             }
         }
         self.outcome = None;
@@ -434,9 +441,17 @@ impl Motor {
         self.set_command(now, Drive::STOP, true);
     }
 
-    /// Forgets the reference yaw (the IMU heading will be learnt again on the next move).
+    /// Forgets the reference yaw (the IMU heading will be learnt again on the next move), and
+    /// that a rotation was cut.
     pub fn forget_reference(&mut self) {
         self.reference_deg = None;
+        self.rotation_cut = false;
+    }
+
+    /// Whether a turn or a look was cut short since the last rotation that finished: the body
+    /// may face off the grid heading, and a look to `0.0` ([`Motor::start_look`]) faces it again.
+    pub fn rotation_was_cut(&self) -> bool {
+        self.rotation_cut
     }
 
     /// Metres driven since the last FORWARD started (mean wheel odometry, last readings).
@@ -473,6 +488,9 @@ impl Motor {
                     self.current = None;
                     if matches!(m.goal, Goal::Yaw { .. }) {
                         self.turn_ended = Some(now);
+                        if result.is_ok() {
+                            self.rotation_cut = false;
+                        }
                     }
                     self.learn_coast(&m);
                     if let (Ok(()), Goal::Yaw { target_deg }, false) = (&result, m.goal, m.look) {

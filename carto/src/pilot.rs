@@ -60,7 +60,8 @@ use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
 use crate::motor::Motor;
-use crate::sensors::{SensorState, Stamped};
+use crate::odometry::CellOffset;
+use crate::sensors::SensorState;
 use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
 use crate::walls::Walls;
@@ -173,6 +174,15 @@ pub struct PilotCounters {
     pub stalls: u64,
 }
 
+/// A sonar reading taken while a FORWARD drives, with the odometry's offset from the stored
+/// cell's centre when the sonar measured.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct DriveReading {
+    /// The range, cm; negative for no echo.
+    cm: f32,
+    offset: CellOffset,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum TaskKind {
     Cartography,
@@ -206,6 +216,12 @@ enum Stage {
     Shifting { mv: Move },
     /// The turn `mv` failed: turning back to the heading it started from.
     TurningBack { mv: Move },
+    /// A STOP or a disconnect cut a turn or a look: facing the stored grid heading again before
+    /// the move `mv`.
+    Refacing { mv: Move },
+    /// A turn succeeded: turning on past its heading and, once `back`, to it again, the sonar
+    /// listening (`pilot/safety.rs`, "Readings in turns"); the look started at `since`.
+    LookingPast { back: bool, since: Instant },
 }
 
 /// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
@@ -233,6 +249,10 @@ pub enum Activity {
     ShiftingBeforeTurn,
     /// Turning back to the grid heading after a turn that failed.
     TurningBack,
+    /// Turning on past the end of a turn and back, the sonar listening.
+    LookingPastTurn,
+    /// Facing the grid heading again after a STOP or a disconnect cut a turn.
+    Refacing,
 }
 
 impl Activity {
@@ -241,7 +261,12 @@ impl Activity {
     pub fn is_turning(self) -> bool {
         matches!(
             self,
-            Activity::Turning | Activity::ScanLook | Activity::ShiftingBeforeTurn | Activity::TurningBack
+            Activity::Turning
+                | Activity::ScanLook
+                | Activity::ShiftingBeforeTurn
+                | Activity::TurningBack
+                | Activity::LookingPastTurn
+                | Activity::Refacing
         )
     }
 
@@ -259,6 +284,8 @@ impl Activity {
             Activity::ScanReading => "reading the sonar (scan)",
             Activity::ShiftingBeforeTurn => "shifting before a turn",
             Activity::TurningBack => "turning back after a failed turn",
+            Activity::LookingPastTurn => "looking past the end of a turn",
+            Activity::Refacing => "facing the grid heading again after a cut turn",
         }
     }
 }
@@ -346,6 +373,8 @@ impl Pilot {
             Stage::Reading { .. } => Activity::ScanReading,
             Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
             Stage::TurningBack { .. } => Activity::TurningBack,
+            Stage::LookingPast { .. } => Activity::LookingPastTurn,
+            Stage::Refacing { .. } => Activity::Refacing,
         }
     }
 
@@ -384,6 +413,10 @@ impl Pilot {
                         // dead-reckoned offset, e.g. of a FORWARD cut short by the disconnect, so
                         // the next move still ends on a cell centre.
                         if self.pose != Some(pose) {
+                            if motor.rotation_was_cut() {
+                                // the body faces where the new pose says: learn it from the IMU
+                                motor.forget_reference();
+                            }
                             motor.reset_odometry();
                             self.forget_surroundings();
                             self.last_straight = None;
@@ -596,7 +629,8 @@ impl Pilot {
                 }
                 Stage::Moving { kind, since } => {
                     if kind.is_turn() {
-                        self.note_turn_reading(now, kind, since, motor, sensors, us);
+                        let target = if kind == Move::Left { 90.0 } else { -90.0 };
+                        self.note_turn_reading(now, target, since, motor, sensors, us);
                     }
                     if kind == Move::Forward && sensors.bumper_pressed_since(since) {
                         self.bumped(now, motor, sensors);
@@ -605,10 +639,10 @@ impl Pilot {
                     // not on the poll the FORWARD ended: the odometry's origin has moved on
                     if kind == Move::Forward
                         && motor.is_busy()
-                        && let Some(r) = self.new_drive_reading(since, us)
+                        && let Some(r) = self.new_drive_reading(since, motor, sensors, us)
                     {
                         self.note_drive_reading(r, motor, sensors);
-                        if let Some(stall) = self.watch_forward(r, motor, sensors) {
+                        if let Some(stall) = self.watch_forward(r) {
                             self.stalled(now, stall, motor, sensors);
                             continue;
                         }
@@ -625,6 +659,9 @@ impl Pilot {
                             self.rest_since = now;
                             self.move_succeeded(kind);
                             self.stage = Stage::Next;
+                            if kind.is_turn() {
+                                self.look_past(now, kind, motor, sensors);
+                            }
                         }
                         Some(Err(e)) => {
                             tracing::warn!(error = %e, ?kind, "move failed: robot stopped");
@@ -632,6 +669,7 @@ impl Pilot {
                             if kind.is_turn() {
                                 self.turn_back(now, kind, motor, sensors);
                             } else {
+                                self.edge_echoes.clear();
                                 self.end_task(now);
                             }
                         }
@@ -667,6 +705,32 @@ impl Pilot {
                         self.end_task(now);
                     }
                 },
+                Stage::Refacing { mv } => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    None | Some(Ok(())) => {
+                        self.rest_since = now;
+                        self.begin_move(now, mv, motor, sensors);
+                    }
+                    Some(Err(e)) => self.fail(now, &format!("facing the grid heading again: {e}")),
+                },
+                Stage::LookingPast { back, since } => {
+                    self.note_turn_reading(now, 0.0, since, motor, sensors, us);
+                    match motor.take_outcome() {
+                        None if motor.is_busy() => return,
+                        None | Some(Ok(())) if !back => self.look_back(now, since, motor, sensors),
+                        Some(Err(e)) if !back => {
+                            tracing::warn!(error = %e, "looking past a turn failed: facing the heading again");
+                            self.look_back(now, since, motor, sensors);
+                        }
+                        outcome => {
+                            if let Some(Err(e)) = outcome {
+                                tracing::warn!(error = %e, "facing the heading again after looking past a turn failed");
+                            }
+                            self.rest_since = now;
+                            self.stage = Stage::Next;
+                        }
+                    }
+                }
                 Stage::BackingOff => match motor.take_outcome() {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.end_task(now),
@@ -726,6 +790,7 @@ impl Pilot {
 
     fn bumped(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
         motor.stop(now);
+        self.edge_echoes.clear();
         self.counters.bumps += 1;
         tracing::warn!(travelled_m = ?motor.travelled_m(sensors), "bumper pressed during FORWARD: stopped");
         self.report_obstacle();
@@ -733,41 +798,51 @@ impl Pilot {
     }
 
     /// The newest reading if it arrived after the FORWARD started at `since` and was not taken
-    /// on an earlier poll (the straight reading at rest, taken before `since`, is not one).
-    fn new_drive_reading(&mut self, since: Instant, us: &Ultrasound) -> Option<Stamped<f32>> {
+    /// on an earlier poll (the straight reading at rest, taken before `since`, is not one), with
+    /// the odometry carried to when the sonar measured (encoder counts arrive less often than
+    /// distance frames).
+    fn new_drive_reading(
+        &mut self,
+        since: Instant,
+        motor: &Motor,
+        sensors: &SensorState,
+        us: &Ultrasound,
+    ) -> Option<DriveReading> {
         let r = us.latest()?;
         if r.at <= since || self.last_drive_reading.is_some_and(|t| r.at <= t) {
             return None;
         }
         self.last_drive_reading = Some(r.at);
-        Some(r)
+        let offset = motor.cell_offset(r.at - motor.config().sonar_lag, sensors);
+        // a FORWARD drives at most 1½ cells (half a cell of slack either way): anything else is
+        // a bad extrapolation, not a place to put an echo
+        let cell = motor.config().cell_size_m;
+        let driven_m = offset.along_m - self.forward_from_m;
+        if r.value >= 0.0 && !(-0.5 * cell..=2.0 * cell).contains(&driven_m) {
+            return None;
+        }
+        Some(DriveReading { cm: r.value, offset })
     }
 
     /// Feeds the reading `r`, taken while a FORWARD drives, to the stall watch, paired with how
-    /// far the wheels had driven when the sonar measured (the odometry carried to that moment:
-    /// encoder counts arrive less often than distance frames).
-    fn watch_forward(&mut self, r: Stamped<f32>, motor: &Motor, sensors: &SensorState) -> Option<Stall> {
+    /// far the wheels had driven when the sonar measured.
+    fn watch_forward(&mut self, r: DriveReading) -> Option<Stall> {
         let watch = self.stall_watch.as_mut()?;
-        if r.value < 0.0 || !r.value.is_finite() {
+        if r.cm < 0.0 || !r.cm.is_finite() {
             watch.restart(); // no echo: the next may come from another surface
             return None;
         }
-        let measured = r.at - motor.config().sonar_lag;
-        let driven_m = motor.cell_offset(measured, sensors).along_m - self.forward_from_m;
-        // a FORWARD drives at most 1½ cells (half a cell of slack either way): anything else is
-        // a bad extrapolation, not a reading
-        let cell = motor.config().cell_size_m;
-        if !(-0.5 * cell..=2.0 * cell).contains(&driven_m) {
-            return None;
-        }
-        tracing::trace!(driven_m, range_cm = r.value, "echo during a FORWARD");
-        watch.push(driven_m, f64::from(r.value) / 100.0)
+        let driven_m = r.offset.along_m - self.forward_from_m;
+        tracing::trace!(driven_m, range_cm = r.cm, "echo during a FORWARD");
+        watch.push(driven_m, f64::from(r.cm) / 100.0)
     }
 
     /// The FORWARD is stalled (`pilot/stall.rs`): stop, take the sonar's word for how far the
     /// body went, report the cell ahead as blocked and drive back, as after the bumper.
     fn stalled(&mut self, now: Instant, stall: Stall, motor: &mut Motor, sensors: &SensorState) {
         motor.stop(now);
+        // placed from the odometry that was slipping
+        self.edge_echoes.clear();
         self.counters.stalls += 1;
         tracing::warn!(
             driven_m = stall.driven_m,

@@ -338,6 +338,17 @@ fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
 /// farther back). The replies to the second FORWARD, and how many readings Carto kept while
 /// driving.
 fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMessage>, u64) {
+    let (replies, kept, _) = forwards_after_hearing(drive_readings, post_m, 2);
+    (replies, kept)
+}
+
+/// [`second_forward_after_hearing`] with `forwards` FORWARDs in all (2 or 3): the replies to
+/// the second, how many readings were kept, and the replies to the third (empty for two).
+fn forwards_after_hearing(
+    drive_readings: bool,
+    post_m: f64,
+    forwards: u8,
+) -> (Vec<GuiMessage>, u64, Vec<GuiMessage>) {
     let mut h = ready_with(CartoConfig { drive_readings, ..fake::test_config() });
     h.robot.send_telemetry = true;
     h.robot.distance_cm = -1.0;
@@ -357,14 +368,22 @@ fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMe
     h.replies.clear();
     h.send(cartography(Command::Forward));
     assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the second FORWARD");
-    (h.reply_msgs(), h.carto.stats().drive_readings)
+    let second = h.reply_msgs();
+    let mut third = Vec::new();
+    if forwards == 3 {
+        h.replies.clear();
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the third FORWARD");
+        third = h.reply_msgs();
+    }
+    (second, h.carto.stats().drive_readings, third)
 }
 
 #[test]
 fn a_post_heard_while_driving_blocks_the_next_forward() {
     // 0.55 m from the start: 0.25 m past the next cell's centre, in the second FORWARD's path
-    // (its front face reaches 0.43 m past that centre); heard 35–53 cm from the sonar, where the
-    // cone is at most 14 cm wide, so the whole arc lies in the path
+    // (its front face reaches 0.43 m past that centre); heard 22–40 cm from the sonar, where the
+    // cone is at most 10.5 cm wide, so the whole arc lies in the path
     let (seen, kept) = second_forward_after_hearing(true, 0.55);
     assert!(kept >= 1, "no reading kept while driving");
     assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
@@ -376,8 +395,60 @@ fn a_post_heard_while_driving_blocks_the_next_forward() {
 
 #[test]
 fn a_post_heard_while_driving_beyond_the_next_forward_does_not_block_it() {
-    // 0.85 m from the start: 12 cm past where the second FORWARD's front face stops
-    let (seen, kept) = second_forward_after_hearing(true, 0.85);
+    // 0.85 m from the start: 12 cm past where the second FORWARD's front face stops (0.73 m)
+    let (seen, kept, third) = forwards_after_hearing(true, 0.85, 3);
     assert!(kept >= 1, "no reading kept while driving");
     assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+    // it would lie in the third FORWARD's path, but the points serve the next FORWARD only: the
+    // second's start forgot them (and heard nothing)
+    assert_eq!(third, vec![GuiMessage::SetRobotPosition { x: 5, y: 8 }, GuiMessage::MoveDone]);
+}
+
+#[test]
+fn a_post_heard_while_driving_just_past_the_next_forward_does_not_block_it() {
+    // 5 mm past where the second FORWARD's front face stops. The fake's readings are fresh while
+    // Carto takes them for 30 ms old, which puts them 1.1 cm short: without the margin beyond
+    // the range (3 sonar σ and the lag's travel) the post would block
+    let (seen, kept) = second_forward_after_hearing(true, 0.735);
+    assert!(kept >= 1, "no reading kept while driving");
+    assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+}
+
+#[test]
+fn a_reading_past_the_end_of_a_turn_blocks_the_forward_after_it() {
+    // 4 cm while the robot faces 6-25 degrees past SOUTH: the side of the path the right turn
+    // from EAST does not sweep, heard while the robot turns on past its new heading and back
+    let look = fake::test_config();
+    assert_eq!(look.look_past_turn_deg, 20.0, "the default");
+    let (seen, kept) = forward_after_a_turn(look, Command::Right, 4.0, (96.0, 115.0));
+    assert!(kept >= 1, "no reading kept past the turn");
+    assert_eq!(seen, BLOCKED_SOUTH);
+    // without the look past the turn nothing is heard there, and the robot drives
+    let off = CartoConfig { look_past_turn_deg: 0.0, ..fake::test_config() };
+    let (blind, kept) = forward_after_a_turn(off, Command::Right, 4.0, (96.0, 115.0));
+    assert_eq!((blind, kept), (DROVE_SOUTH.to_vec(), 0));
+}
+
+#[test]
+fn the_look_past_a_turn_ends_facing_the_new_heading() {
+    let mut h = ready_with(fake::test_config());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    let mut past = 0.0f32;
+    h.send(cartography(Command::Left));
+    for _ in 0..8000 {
+        // clockwise from east: NORTH is 270, a left turn goes on past it towards 250
+        let cw = h.robot.heading_cw_deg();
+        if (200.0..=300.0).contains(&cw) {
+            past = past.max(270.0 - cw);
+        }
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
+    assert!(past >= 15.0, "turned only {past:.1} degrees past NORTH");
+    assert!((h.robot.heading_cw_deg() - 270.0).abs() <= 2.0, "ended at {:.1}", h.robot.heading_cw_deg());
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::North));
 }

@@ -495,6 +495,27 @@ fn forward_after_a_stop_mid_move_completes_to_the_next_cell_centre() {
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 6)));
 }
 
+#[test]
+fn a_turn_cut_by_a_stop_is_turned_back_before_the_next_forward() {
+    let mut h = ready();
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| (-60.0..=-30.0).contains(&yaw_deg(h))), "the turn did not get under way");
+    h.send(GuiMessage::StopRobot);
+    h.run_ms(1000);
+    let cut = yaw_deg(&h);
+    assert!(cut < -20.0, "stopped at {cut:.1}°");
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(Heading::East), "a cut turn turned the pose");
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the FORWARD");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    // it faced EAST again first, then drove one cell east (learning the heading from the IMU
+    // instead would have driven it off at the angle the turn was cut)
+    assert!(yaw_deg(&h).abs() <= 2.0, "heading {:.1}°", yaw_deg(&h));
+    assert!((h.robot.x - 0.30).abs() <= 0.015, "ended at x {:.3}", h.robot.x);
+    assert!(h.robot.y.abs() <= 0.02, "ended {:.3} m off the row", h.robot.y);
+}
+
 /// STOP part of the way through a FORWARD and ask for a RIGHT at once (with the encoders muted
 /// from the STOP on unless `encoders`); returns how long after the zero drive the turn's first
 /// drive came. The turn must have completed.

@@ -17,6 +17,7 @@
 
 use carto::{Carto, CartoConfig, CartoRuntime};
 use cute::{CellValue, Cute, CuteConfig, CuteError, CuteRuntime, Wrap};
+use robot_model::grid::GridPose;
 use robot_model::time::{Duration, Instant};
 use transport::{
     ByteFaults, FaultConfig, FaultInjector, Link, MemConnector, MemLink, MemListener, MockClock, TraceHandle,
@@ -364,22 +365,28 @@ impl Lockstep {
     fn note_obstacle_report(&self, now: Instant) {
         let p = self.twin.body().pose();
         let Some((pose, _)) = self.carto.carto().believed_pose() else { return };
-        let Some((r, c)) = pose.ahead() else { return };
-        let from = (usize::from(pose.x), usize::from(pose.y));
-        let to = (usize::from(r), usize::from(c));
         let along = self.along_true_and_believed();
         tracing::debug!(
             t_s = now.as_secs_f64(),
             x = p.x,
             y = p.y,
-            ?from,
-            ?to,
+            from = ?(pose.x, pose.y),
+            to = ?pose.ahead(),
             true_cell = ?self.twin.cell(),
             true_along_m = along.map(|a| a.0),
             carto_along_m = along.map(|a| a.1),
-            move_exists = self.truth.can_move(from, to),
+            move_exists = ?self.move_ahead_exists(pose),
             "Carto reported the cell ahead blocked"
         );
+    }
+
+    /// Whether the truth has the FORWARD from `pose`'s cell to the one ahead (`None` off the
+    /// grid).
+    fn move_ahead_exists(&self, pose: GridPose) -> Option<bool> {
+        let (r, c) = pose.ahead()?;
+        Some(
+            self.truth.can_move((usize::from(pose.x), usize::from(pose.y)), (usize::from(r), usize::from(c))),
+        )
     }
 
     /// Notes a new contact: the report's [`FirstContact`], and a debug line for each one with
@@ -394,13 +401,7 @@ impl Lockstep {
         let carto_believes =
             believed.and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset));
         // Whether the FORWARD Carto may be driving from its stored cell exists in the truth.
-        let move_ahead_exists = believed.and_then(|(pose, _)| {
-            let (r, c) = pose.ahead()?;
-            Some(
-                self.truth
-                    .can_move((usize::from(pose.x), usize::from(pose.y)), (usize::from(r), usize::from(c))),
-            )
-        });
+        let move_ahead_exists = believed.and_then(|(pose, _)| self.move_ahead_exists(pose));
         let cell_turnable = cell.map(|(r, c)| self.truth.can_turn(r, c));
         tracing::debug!(
             t_s = now.as_secs_f64(),

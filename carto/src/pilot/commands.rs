@@ -63,6 +63,14 @@ impl Pilot {
     }
 
     pub(super) fn begin_move(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        if motor.rotation_was_cut() {
+            // a STOP or a disconnect cut a turn or a look: face the stored heading again first
+            tracing::info!(?mv, "facing the grid heading again after a cut rotation");
+            return match motor.start_look(now, 0.0, sensors) {
+                Ok(()) => self.stage = Stage::Refacing { mv },
+                Err(e) => self.fail(now, &format!("facing the grid heading again: {e}")),
+            };
+        }
         match mv {
             Move::Forward => self.stage = Stage::Checking { since: now },
             Move::Right | Move::Left => self.turn_safely(now, mv, motor, sensors),

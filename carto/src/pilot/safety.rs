@@ -50,26 +50,40 @@
 //!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`],
 //!   half its cycle, before the frame arrived; carried at most
 //!   [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it
-//!   is kept on the cone's edge farther from the line of the next FORWARD ([`FAR_SIGMAS`] sonar
-//!   σ beyond its range), so it blocks that
-//!   FORWARD only when the whole arc lies in the body's path. These points feed only the corridor check, never
-//!   the turn check: a turn would shift away from an echo whose position is this uncertain.
-//!   Readings at rest clear them as they clear the others. Measured in the README ("Safety
-//!   checks"): on central rays, or over wider windows, they blocked moves that were free.
+//!   is kept on the cone's edge farther from the next FORWARD's line (the heading's line through
+//!   where the robot was), [`FAR_SIGMAS`] sonar σ beyond its range, so it blocks that FORWARD
+//!   only when the whole arc lies in the body's path. These points feed only the corridor
+//!   check, never the turn check: a turn would shift away from an echo whose position is this
+//!   uncertain. Readings at rest clear them as they clear the others. Measured in the README
+//!   ("Safety checks"): on central rays, or over wider windows, they blocked moves that were
+//!   free.
+//!
+//!   The end of a turn sweeps the cone across one side of the next FORWARD's path only (the
+//!   side the turn comes from). After a mapping turn succeeds the robot therefore turns on past
+//!   its new heading by [`CartoConfig::look_past_turn_deg`], and back, as a look (the reference
+//!   heading stays), and keeps the readings of that sweep by the same rules: the other side.
+//!   The body sweeps almost nothing new: turning 90° on the spot, its four corners have just
+//!   swept the whole turning circle's rim but for two arcs of 5°. Trajectory batches do not
+//!   look: their one `MOVE_DONE` ends the batch, so after a STOP Cute cannot tell which of its
+//!   turns were made, and longer turns make a STOP land in one more often.
 //! - **Readings while driving.** The sonar keeps measuring while a FORWARD drives, and from
-//!   farther back its cone is wider: at 0.9 m it spans 24 cm, about the body's width, where at
-//!   rest in the next cell it spans 6 cm. Every echo heard while a FORWARD drives is kept
+//!   farther back its cone is wider: 24 cm across at 0.9 m, about the body's width, against
+//!   12 cm at 0.45 m, from the next cell's centre. Every echo heard while a FORWARD drives, no
+//!   farther than the next FORWARD's corridor can reach, is kept
 //!   ([`CartoConfig::drive_readings`]), placed from where the odometry, carried to when the
-//!   sonar measured, says the robot was, on the cone's edge farther from the row's line as a
-//!   reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`] sonar σ (the closest
+//!   sonar measured, says the robot was, on the cone's edge farther from the heading's line as
+//!   a reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`] sonar σ (the closest
 //!   of the ten readings a second of a wall just past the corridor's end would otherwise fall
-//!   inside it) plus the distance the robot drives in the sonar's lag
-//!   ([`CartoConfig::drive_timing_m`]: the frame carries a result up to twice the mean lag
-//!   old). They feed the corridor check of the next FORWARD only, as the readings in turns do,
-//!   and are forgotten when it starts or a turn does: a chair leg or a box corner beside the
-//!   next cell's path, outside the cone from the cell the robot stops in, blocks that FORWARD.
-//!   With 0.45 m cells an echo whose along-track place lies in the next corridor was heard from
-//!   at most 0.9 m, where the whole arc lies in the body's path.
+//!   inside it) plus [`CartoConfig::drive_timing_m`], the distance the robot drives in the
+//!   sonar's mean lag (the frame carries a result measured 0–2 mean lags before it; one is
+//!   assumed, so a fresher one was heard from up to that much farther on). The margin also
+//!   covers the along-track shortening of the edge's placement, r·(1 − cos 7.5°): 8 mm at
+//!   0.9 m. They feed the corridor check of the next FORWARD only, as the readings in turns do,
+//!   and are forgotten when it starts, when a turn does, or when this FORWARD does not end on
+//!   its cell (the bumper, a stall, a failed move): a chair leg or a box corner beside the next
+//!   cell's path, outside the cone from the cell the robot stops in, blocks that FORWARD. With
+//!   0.45 m cells an echo whose along-track place lies in the next corridor was heard from at
+//!   most 0.9 m, where the whole arc lies in the body's path.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
@@ -77,11 +91,11 @@
 use robot_model::grid::{GridPose, Heading, Move};
 use robot_model::time::Instant;
 
-use super::{Pilot, Stage};
+use super::{DriveReading, Pilot, Stage, TaskKind};
 use crate::CartoConfig;
 use crate::motor::Motor;
 use crate::odometry::CellOffset;
-use crate::sensors::{SensorState, Stamped};
+use crate::sensors::SensorState;
 use crate::surroundings::Pose2;
 use crate::ultrasound::Ultrasound;
 
@@ -132,6 +146,8 @@ pub(super) struct Safety {
     turn_readings: bool,
     /// Keep the readings taken while a FORWARD drives.
     drive_readings: bool,
+    /// How far past a finished turn the robot turns on and back, listening, degrees (0: off).
+    look_past_deg: f64,
     /// How long before its frame arrives a reading was measured.
     sonar_lag_s: f64,
     /// One reading's noise, metres.
@@ -164,6 +180,7 @@ impl Safety {
             strafe_shifts: cfg.strafe_shifts,
             turn_readings: cfg.turn_readings,
             drive_readings: cfg.drive_readings,
+            look_past_deg: cfg.look_past_turn_deg.abs(),
             sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
             sonar_sigma_m: cfg.sonar_sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
@@ -275,12 +292,13 @@ impl Pilot {
         self.edge_echoes.clear();
     }
 
-    /// Keeps the newest reading if it arrived while the turn `turn`, started at `since`, runs
-    /// (module docs, "Readings in turns").
+    /// Keeps the newest reading if it arrived while a turn or a look past one, started at
+    /// `since`, runs towards `target_deg` from the stored pose's heading (module docs, "Readings
+    /// in turns").
     pub(super) fn note_turn_reading(
         &mut self,
         now: Instant,
-        turn: Move,
+        target_deg: f64,
         since: Instant,
         motor: &Motor,
         sensors: &SensorState,
@@ -316,7 +334,7 @@ impl Pilot {
             - s.sonar_lag_s)
             .clamp(-max_s, max_s);
         robot.yaw_deg += sensors.yaw_rate_dps(now, cfg) * measured_after_sample_s;
-        let target = heading_deg(pose.heading) + if turn == Move::Left { 90.0 } else { -90.0 };
+        let target = heading_deg(pose.heading) + target_deg;
         if crate::sensors::wrap180(robot.yaw_deg - target).abs() > TURN_READING_WINDOW_DEG {
             return;
         }
@@ -325,17 +343,55 @@ impl Pilot {
         self.keep_on_far_edge(robot, target, range);
     }
 
+    /// After the turn `mv` succeeded (the stored pose faces its new heading): turns on past that
+    /// heading by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back (module
+    /// docs, "Readings in turns"). Off, without a pose, or when the look cannot start, nothing
+    /// happens and the next command follows.
+    pub(super) fn look_past(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+        let s = self.safety;
+        // mapping moves only: a trajectory's MOVE_DONE ends the whole batch, so after a STOP in
+        // it Cute cannot tell which turns were made, and the look would make the turns longer
+        let mapping = self.current.as_ref().is_some_and(|t| t.kind == TaskKind::Cartography);
+        if !s.turn_readings || s.look_past_deg <= 0.0 || self.pose.is_none() || !mapping {
+            return;
+        }
+        let past = if mv == Move::Left { s.look_past_deg } else { -s.look_past_deg };
+        match motor.start_look(now, past, sensors) {
+            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now },
+            Err(e) => tracing::warn!(error = %e, "cannot look past the turn"),
+        }
+    }
+
+    /// Faces the grid heading again after looking past a turn.
+    pub(super) fn look_back(
+        &mut self,
+        now: Instant,
+        since: Instant,
+        motor: &mut Motor,
+        sensors: &SensorState,
+    ) {
+        match motor.start_look(now, 0.0, sensors) {
+            Ok(()) => self.stage = Stage::LookingPast { back: true, since },
+            Err(e) => {
+                tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
+                self.rest_since = now;
+                self.stage = Stage::Next;
+            }
+        }
+    }
+
     /// Keeps the reading `r`, taken while a FORWARD drives (module docs, "Readings while
     /// driving"), placed from where the odometry says the robot was when the sonar measured.
-    pub(super) fn note_drive_reading(&mut self, r: Stamped<f32>, motor: &Motor, sensors: &SensorState) {
+    pub(super) fn note_drive_reading(&mut self, r: DriveReading, motor: &Motor, sensors: &SensorState) {
         let s = self.safety;
-        let range = f64::from(r.value) / 100.0;
-        if !s.drive_readings || !(0.0..=s.max_range_m).contains(&range) {
+        let range = f64::from(r.cm) / 100.0;
+        // farther than this from the sonar, nothing can lie in the next FORWARD's corridor
+        let reach_m = 2.0 * s.cell_m + s.half_length_m;
+        if !s.drive_readings || !(0.0..=reach_m).contains(&range) {
             return;
         }
         let Some(pose) = self.pose else { return };
-        let measured = r.at - motor.config().sonar_lag;
-        let Some(robot) = self.believed_with(motor.cell_offset(measured, sensors), motor, sensors) else {
+        let Some(robot) = self.believed_with(r.offset, motor, sensors) else {
             return;
         };
         tracing::trace!(
@@ -346,8 +402,8 @@ impl Pilot {
             "reading kept during a FORWARD"
         );
         self.counters.drive_readings += 1;
-        // the frame carries a result measured up to twice the mean lag before it: the body may
-        // have been this much farther back
+        // the frame carries a result measured 0–2 mean lags before it and one is assumed: from a
+        // fresher one the body was up to this much farther on, and the echo that much farther
         self.keep_on_far_edge(robot, heading_deg(pose.heading), range + s.drive_timing_m);
     }
 
