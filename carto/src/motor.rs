@@ -226,8 +226,8 @@ pub struct Motor {
     /// The reference heading a turn started from, while that turn runs or after it failed
     /// ([`Motor::start_turn_back`]).
     turn_from_deg: Option<f64>,
-    /// A turn or a look was cut short by [`Motor::stop`]: the body may face off the reference
-    /// heading, which still names the grid heading of the stored pose.
+    /// A turn or a look was cut short by [`Motor::stop`], or a look failed: the body may face off
+    /// the reference heading, which still names the grid heading of the stored pose.
     rotation_cut: bool,
 }
 
@@ -427,14 +427,13 @@ impl Motor {
         {
             // the body may still be rotating: the drift estimate waits as after a finished turn
             self.turn_ended = Some(now);
-            if !matches!(m.phase, Phase::Rest { .. }) {
-                // A turn or a look cut short leaves the body between two grid headings (one still
-                // waiting for rest has not turned yet). The reference stays: the stored pose
-                // keeps the heading the turn started from, and the body faces it again before
-                // the next move (the pilot asks `rotation_was_cut`). Learning the reference from
-                // the IMU instead took the cut angle for the grid heading.
-                self.rotation_cut = true;
-            }
+            // A turn or a look cut short leaves the body between two grid headings (also one
+            // resting before it starts: the look back from a look past a turn rests first, 20°
+            // off). The reference stays: the stored pose keeps the heading the turn started
+            // from, and the body faces it again before the next move (the pilot asks
+            // `rotation_was_cut`). Learning the reference from the IMU instead took the cut angle
+            // for the grid heading.
+            self.rotation_cut = true;
         }
         self.outcome = None;
         self.turn_from_deg = None;
@@ -448,8 +447,28 @@ impl Motor {
         self.rotation_cut = false;
     }
 
-    /// Whether a turn or a look was cut short since the last rotation that finished: the body
-    /// may face off the grid heading, and a look to `0.0` ([`Motor::start_look`]) faces it again.
+    /// Notes that the body may face off the reference heading (a look back that could not
+    /// start): the next move faces it first.
+    pub fn mark_rotation_cut(&mut self) {
+        self.rotation_cut = true;
+    }
+
+    /// Notes that the body faces the reference heading closely enough for the next move to
+    /// start from where it is (a FORWARD's heading hold and a turn's absolute target take the
+    /// rest): the cut is forgotten, the reference kept.
+    pub fn accept_rotation_cut(&mut self) {
+        self.rotation_cut = false;
+    }
+
+    /// How far the body faces from the reference heading, counter-clockwise degrees (the IMU's
+    /// latest reading against the reference); `None` without either.
+    pub fn off_reference_deg(&self, s: &SensorState) -> Option<f64> {
+        Some(s.yaw_deg()?.value - self.reference_deg?)
+    }
+
+    /// Whether a turn or a look was cut short or failed since the last rotation that finished:
+    /// the body may face off the grid heading, and a look to `0.0` ([`Motor::start_look`]) faces
+    /// it again.
     pub fn rotation_was_cut(&self) -> bool {
         self.rotation_cut
     }
@@ -488,9 +507,9 @@ impl Motor {
                     self.current = None;
                     if matches!(m.goal, Goal::Yaw { .. }) {
                         self.turn_ended = Some(now);
-                        if result.is_ok() {
-                            self.rotation_cut = false;
-                        }
+                        // a look that failed leaves the body off the heading it aimed at (a turn
+                        // that failed forgets the reference below and is turned back)
+                        self.rotation_cut = if result.is_ok() { false } else { m.look || self.rotation_cut };
                     }
                     self.learn_coast(&m);
                     if let (Ok(()), Goal::Yaw { target_deg }, false) = (&result, m.goal, m.look) {

@@ -219,8 +219,9 @@ enum Stage {
     /// A STOP or a disconnect cut a turn or a look: facing the stored grid heading again before
     /// the move `mv`.
     Refacing { mv: Move },
-    /// A turn succeeded: turning on past its heading and, once `back`, to it again, the sonar
-    /// listening (`pilot/safety.rs`, "Readings in turns"); the look started at `since`.
+    /// After a mapping turn's `MOVE_DONE`: turning on past the new heading and, once `back`, to
+    /// it again, the sonar listening (`pilot/safety.rs`, "Readings in turns"); the look started
+    /// at `since`. The next command waits in the queue.
     LookingPast { back: bool, since: Instant },
 }
 
@@ -249,7 +250,7 @@ pub enum Activity {
     ShiftingBeforeTurn,
     /// Turning back to the grid heading after a turn that failed.
     TurningBack,
-    /// Turning on past the end of a turn and back, the sonar listening.
+    /// After a turn: turning on past the new heading and back, the sonar listening.
     LookingPastTurn,
     /// Facing the grid heading again after a STOP or a disconnect cut a turn.
     Refacing,
@@ -324,6 +325,10 @@ pub struct Pilot {
     last_drive_reading: Option<Instant>,
     /// The odometry's offset along the heading when the running FORWARD started, metres.
     forward_from_m: f64,
+    /// The mapping turn that just succeeded: once its task has ended, the robot looks past it.
+    look_pending: Option<Move>,
+    /// Re-facings of the grid heading that failed in a row ([`Pilot::refacing_failed`]).
+    reface_failures: u8,
 }
 
 impl Pilot {
@@ -351,6 +356,8 @@ impl Pilot {
             stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m, cfg.drive_timing_m())),
             last_drive_reading: None,
             forward_from_m: 0.0,
+            look_pending: None,
+            reface_failures: 0,
         }
     }
 
@@ -380,7 +387,8 @@ impl Pilot {
 
     /// Whether a task runs or waits.
     pub fn is_busy(&self) -> bool {
-        self.current.is_some() || !self.queue.is_empty()
+        // a look past a turn runs after the turn's task has ended
+        self.current.is_some() || !self.queue.is_empty() || !matches!(self.stage, Stage::Next)
     }
 
     /// Commands waiting: the rest of the current task, queued tasks and a partial batch.
@@ -413,6 +421,7 @@ impl Pilot {
                         // dead-reckoned offset, e.g. of a FORWARD cut short by the disconnect, so
                         // the next move still ends on a cell centre.
                         if self.pose != Some(pose) {
+                            self.look_pending = None;
                             if motor.rotation_was_cut() {
                                 // the body faces where the new pose says: learn it from the IMU
                                 motor.forget_reference();
@@ -522,6 +531,7 @@ impl Pilot {
     fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {
         motor.stop(now);
         self.last_straight = None;
+        self.look_pending = None;
         if !matches!(self.stage, Stage::Next) {
             // stopped in the middle of a scan or a shift: the robot may face off the grid heading
             // and is somewhere Carto did not plan; what it saw from there is not trusted
@@ -562,6 +572,14 @@ impl Pilot {
         for _ in 0..1024 {
             match self.stage {
                 Stage::Next => {
+                    if self.current.is_none()
+                        && let Some(turn) = self.look_pending.take()
+                    {
+                        // the turn's MOVE_DONE has gone out: Cute and Carto hold the new heading
+                        // whatever cuts the look; the next command waits in the queue
+                        self.look_past(now, turn, motor, sensors);
+                        continue;
+                    }
                     if self.current.is_none() {
                         match self.queue.pop_front() {
                             Some(t) => self.current = Some(t),
@@ -630,7 +648,8 @@ impl Pilot {
                 Stage::Moving { kind, since } => {
                     if kind.is_turn() {
                         let target = if kind == Move::Left { 90.0 } else { -90.0 };
-                        self.note_turn_reading(now, target, since, motor, sensors, us);
+                        let window = safety::TURN_READING_WINDOW_DEG;
+                        self.note_turn_reading(now, target, window, since, motor, sensors, us);
                     }
                     if kind == Move::Forward && sensors.bumper_pressed_since(since) {
                         self.bumped(now, motor, sensors);
@@ -652,6 +671,7 @@ impl Pilot {
                         None => {
                             // The move vanished (stopped from outside): treat as failed.
                             self.counters.moves_failed += 1;
+                            self.edge_echoes.clear();
                             self.end_task(now);
                         }
                         Some(Ok(())) => {
@@ -660,7 +680,7 @@ impl Pilot {
                             self.move_succeeded(kind);
                             self.stage = Stage::Next;
                             if kind.is_turn() {
-                                self.look_past(now, kind, motor, sensors);
+                                self.look_pending = self.look_wanted().then_some(kind);
                             }
                         }
                         Some(Err(e)) => {
@@ -709,12 +729,14 @@ impl Pilot {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => {
                         self.rest_since = now;
+                        self.reface_failures = 0;
                         self.begin_move(now, mv, motor, sensors);
                     }
-                    Some(Err(e)) => self.fail(now, &format!("facing the grid heading again: {e}")),
+                    Some(Err(e)) => self.refacing_failed(now, mv, motor, sensors, &e.to_string()),
                 },
                 Stage::LookingPast { back, since } => {
-                    self.note_turn_reading(now, 0.0, since, motor, sensors, us);
+                    let window = self.safety.look_window_deg();
+                    self.note_turn_reading(now, 0.0, window, since, motor, sensors, us);
                     match motor.take_outcome() {
                         None if motor.is_busy() => return,
                         None | Some(Ok(())) if !back => self.look_back(now, since, motor, sensors),
@@ -724,6 +746,8 @@ impl Pilot {
                         }
                         outcome => {
                             if let Some(Err(e)) = outcome {
+                                // the motor marked the rotation cut: the next move faces the
+                                // heading first
                                 tracing::warn!(error = %e, "facing the heading again after looking past a turn failed");
                             }
                             self.rest_since = now;

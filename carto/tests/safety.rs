@@ -414,30 +414,73 @@ fn a_post_heard_while_driving_just_past_the_next_forward_does_not_block_it() {
     assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
 }
 
+/// A right turn from EAST to SOUTH with no echo, then a FORWARD during which the sonar reads
+/// `cm` while the heading lies in `while_deg` (clockwise from east) and no echo otherwise: the
+/// replies to the FORWARD, how many readings were kept in turns and looks, and the furthest the
+/// body turned past SOUTH during the turn's own command, degrees.
+fn forward_hearing_past_a_right_turn(
+    cfg: CartoConfig,
+    cm: f32,
+    while_deg: (f32, f32),
+) -> (Vec<GuiMessage>, u64, f32) {
+    let mut h = ready_with(cfg);
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    let mut past_in_turn = 0.0f32;
+    h.send(cartography(Command::Right));
+    for _ in 0..8000 {
+        let cw = h.robot.heading_cw_deg();
+        if (60.0..=180.0).contains(&cw) {
+            past_in_turn = past_in_turn.max(cw - 90.0);
+        }
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    for _ in 0..12_000 {
+        let cw = h.robot.heading_cw_deg();
+        h.robot.distance_cm = if (while_deg.0..=while_deg.1).contains(&cw) { cm } else { -1.0 };
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the FORWARD");
+    (h.reply_msgs(), h.carto.stats().turn_readings, past_in_turn)
+}
+
 #[test]
-fn a_reading_past_the_end_of_a_turn_blocks_the_forward_after_it() {
+fn a_forward_after_a_turn_looks_past_it_first_and_is_blocked_by_what_it_hears() {
     // 4 cm while the robot faces 6-25 degrees past SOUTH: the side of the path the right turn
-    // from EAST does not sweep, heard while the robot turns on past its new heading and back
+    // from EAST did not sweep. The turn's MOVE_DONE came first: the look belongs to the FORWARD
     let look = fake::test_config();
     assert_eq!(look.look_past_turn_deg, 20.0, "the default");
-    let (seen, kept) = forward_after_a_turn(look, Command::Right, 4.0, (96.0, 115.0));
+    let (seen, kept, past_in_turn) = forward_hearing_past_a_right_turn(look, 4.0, (96.0, 115.0));
+    assert!(past_in_turn < 5.0, "the turn's own command went {past_in_turn:.1} degrees past SOUTH");
     assert!(kept >= 1, "no reading kept past the turn");
     assert_eq!(seen, BLOCKED_SOUTH);
-    // without the look past the turn nothing is heard there, and the robot drives
+    // without the look nothing is heard there, and the robot drives
     let off = CartoConfig { look_past_turn_deg: 0.0, ..fake::test_config() };
-    let (blind, kept) = forward_after_a_turn(off, Command::Right, 4.0, (96.0, 115.0));
+    let (blind, kept, _) = forward_hearing_past_a_right_turn(off, 4.0, (96.0, 115.0));
     assert_eq!((blind, kept), (DROVE_SOUTH.to_vec(), 0));
 }
 
 #[test]
-fn the_look_past_a_turn_ends_facing_the_new_heading() {
+fn the_look_past_a_turn_ends_facing_the_heading_and_the_forward_drives_straight() {
     let mut h = ready_with(fake::test_config());
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    let mut past = 0.0f32;
     h.send(cartography(Command::Left));
-    for _ in 0..8000 {
-        // clockwise from east: NORTH is 270, a left turn goes on past it towards 250
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the turn");
+    h.replies.clear();
+    let mut past = 0.0f32;
+    h.send(cartography(Command::Forward));
+    for _ in 0..12_000 {
+        // clockwise from east: NORTH is 270, the look goes on past it towards 250
         let cw = h.robot.heading_cw_deg();
         if (200.0..=300.0).contains(&cw) {
             past = past.max(270.0 - cw);
@@ -447,8 +490,111 @@ fn the_look_past_a_turn_ends_facing_the_new_heading() {
             break;
         }
     }
-    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
     assert!(past >= 15.0, "turned only {past:.1} degrees past NORTH");
     assert!((h.robot.heading_cw_deg() - 270.0).abs() <= 2.0, "ended at {:.1}", h.robot.heading_cw_deg());
+    assert!(
+        h.robot.x.abs() <= 0.02 && (h.robot.y - 0.30).abs() <= 0.015,
+        "ended at ({:.3}, {:.3})",
+        h.robot.x,
+        h.robot.y
+    );
+}
+
+#[test]
+fn a_stop_during_the_look_past_a_turn_makes_the_next_forward_face_the_heading_before_its_check() {
+    let mut h = ready_with(fake::test_config());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Left));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the turn");
     assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::North));
+    h.send(cartography(Command::Forward));
+    // cut the look 8-15 degrees past NORTH (clockwise from east: 255-262)
+    assert!(h.run_until(8000, |h| (255.0..=262.0).contains(&h.robot.heading_cw_deg())), "no look");
+    h.send(GuiMessage::StopRobot);
+    h.run_ms(1000);
+    assert!(h.robot.heading_cw_deg() < 265.0, "stopped at {:.1}", h.robot.heading_cw_deg());
+    // the turn's MOVE_DONE had gone out: Carto and Cute both hold NORTH
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::North));
+    // a wall 10 cm ahead that the sonar hears only facing NORTH (within 3 degrees): the reading
+    // at rest before the FORWARD must be taken facing the heading, not where the look was cut
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    for _ in 0..12_000 {
+        let facing_north = (h.robot.heading_cw_deg() - 270.0).abs() <= 3.0;
+        h.robot.distance_cm = if facing_north { 10.0 } else { -1.0 };
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
+    assert!((h.robot.heading_cw_deg() - 270.0).abs() <= 2.0, "ended at {:.1}", h.robot.heading_cw_deg());
+}
+
+/// A LEFT turn to NORTH, then a FORWARD sent at once, and a STOP while the look past the turn
+/// is `cut_cw` degrees clockwise from east (NORTH is 270); then the body cannot turn clockwise
+/// from where it stopped (something beside it), so facing NORTH again jams.
+fn look_cut_and_refacing_blocked(cut_cw: (f32, f32)) -> Harness {
+    let mut h = ready_with(fake::test_config());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Left));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the turn");
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(8000, |h| (cut_cw.0..=cut_cw.1).contains(&h.robot.heading_cw_deg())), "no look");
+    h.send(GuiMessage::StopRobot);
+    h.run_ms(1000);
+    h.robot.yaw_min_deg = Some(h.robot.yaw.to_degrees());
+    h.replies.clear();
+    h
+}
+
+#[test]
+fn a_refacing_that_jams_close_to_the_heading_lets_the_forward_drive_and_keeps_the_heading() {
+    // stopped 6-9 degrees past NORTH: within 10 degrees, the FORWARD runs from there
+    let mut h = look_cut_and_refacing_blocked((261.0, 264.0));
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
+    // Carto still holds NORTH: once the body is free, the next FORWARD steers back onto it
+    h.robot.yaw_min_deg = None;
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 2), "no second MOVE_DONE");
+    assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((3, 5)));
+    assert!((h.robot.heading_cw_deg() - 270.0).abs() <= 2.0, "ended at {:.1}", h.robot.heading_cw_deg());
+}
+
+#[test]
+fn a_refacing_that_jams_far_from_the_heading_fails_the_move_and_is_tried_again() {
+    // stopped 14-18 degrees past NORTH: the FORWARD fails without moving, NORTH is kept
+    let mut h = look_cut_and_refacing_blocked((252.0, 256.0));
+    let (x0, y0) = (h.robot.x, h.robot.y);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::MoveDone]);
+    assert!(h.distance_from(x0, y0) <= 0.01, "moved {:.3} m", h.distance_from(x0, y0));
+    assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::North));
+    // free again: the next FORWARD faces NORTH first, then drives
+    h.robot.yaw_min_deg = None;
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
+    assert!((h.robot.heading_cw_deg() - 270.0).abs() <= 2.0, "ended at {:.1}", h.robot.heading_cw_deg());
+}
+
+#[test]
+fn after_three_refacings_that_jam_the_heading_is_learnt_again_and_the_robot_moves() {
+    let mut h = look_cut_and_refacing_blocked((252.0, 256.0));
+    for n in 1..=3 {
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(12_000, |h| h.move_done_count() == n), "no MOVE_DONE {n}");
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::MoveDone; 3]);
+    // the fourth is not refused: the robot is never stuck refusing every move
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 4), "no fourth MOVE_DONE");
+    assert_eq!(h.reply_msgs()[3..], [GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
 }

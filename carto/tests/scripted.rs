@@ -95,7 +95,7 @@ fn cartography_right_turns_minus_90_ccw_and_updates_heading() {
     assert!((yaw + 90.0).abs() <= 2.0, "yaw {yaw:.2}°");
     assert!(h.distance_from(0.0, 0.0) < 0.01, "turned in place");
     let pose = h.carto.status().pose.unwrap();
-    assert_eq!(pose.heading, robot_model::grid::Heading::South);
+    assert_eq!(pose.heading, Heading::South);
     // FORWARD now goes south: row + 1
     h.replies.clear();
     h.send(cartography(Command::Forward));
@@ -110,7 +110,7 @@ fn cartography_left_turns_plus_90_ccw() {
     assert!(h.run_until(8000, |h| h.move_done_count() == 1));
     let yaw = yaw_deg(&h);
     assert!((yaw - 90.0).abs() <= 2.0, "yaw {yaw:.2}°");
-    assert_eq!(h.carto.status().pose.unwrap().heading, robot_model::grid::Heading::North);
+    assert_eq!(h.carto.status().pose.unwrap().heading, Heading::North);
 }
 
 #[test]

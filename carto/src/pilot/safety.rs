@@ -59,13 +59,17 @@
 //!   free.
 //!
 //!   The end of a turn sweeps the cone across one side of the next FORWARD's path only (the
-//!   side the turn comes from). After a mapping turn succeeds the robot therefore turns on past
-//!   its new heading by [`CartoConfig::look_past_turn_deg`], and back, as a look (the reference
-//!   heading stays), and keeps the readings of that sweep by the same rules: the other side.
-//!   The body sweeps almost nothing new: turning 90° on the spot, its four corners have just
-//!   swept the whole turning circle's rim but for two arcs of 5°. Trajectory batches do not
-//!   look: their one `MOVE_DONE` ends the batch, so after a STOP Cute cannot tell which of its
-//!   turns were made, and longer turns make a STOP land in one more often.
+//!   side the turn comes from). So after a mapping turn and its `MOVE_DONE` the robot turns on
+//!   past the new heading, the way the turn went, by [`CartoConfig::look_past_turn_deg`], and
+//!   back, as a look (the reference heading stays), and keeps the readings of that sweep (all
+//!   of them, within the look's angle plus 5°) by the same rules: the other side. Cute's next
+//!   command waits in the queue meanwhile; the `MOVE_DONE` has gone out, so Cute and Carto agree
+//!   on the heading whatever cuts the look (a cut look is faced again before the next move,
+//!   [`crate::motor::Motor::rotation_was_cut`]). The body sweeps
+//!   almost nothing new: turning 90° on the spot, its four corners have just swept the whole
+//!   turning circle's rim but for two arcs of 5°. Trajectory batches do not look: their one
+//!   `MOVE_DONE` ends the batch, so after a STOP Cute cannot tell which of its turns were made,
+//!   and a look would make a STOP land before the batch's first position more often.
 //! - **Readings while driving.** The sonar keeps measuring while a FORWARD drives, and from
 //!   farther back its cone is wider: 24 cm across at 0.9 m, about the body's width, against
 //!   12 cm at 0.45 m, from the next cell's centre. Every echo heard while a FORWARD drives, no
@@ -105,7 +109,10 @@ const SHIFT_STEP_M: f64 = 0.01;
 pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
 /// degrees: they look beside the path of the FORWARD that may follow.
-const TURN_READING_WINDOW_DEG: f64 = 20.0;
+pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
+/// A look past a turn keeps its readings within its own angle plus this, degrees (the look may
+/// overshoot a little before it settles).
+const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
 const FAR_SIGMAS: f64 = 3.0;
 /// A larger disagreement between sonar and wheels means two different objects answered, metres.
@@ -185,6 +192,11 @@ impl Safety {
             sonar_sigma_m: cfg.sonar_sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
         }
+    }
+
+    /// How far from the grid heading a reading taken while looking past a turn may be, degrees.
+    pub(super) fn look_window_deg(&self) -> f64 {
+        self.look_past_deg + LOOK_WINDOW_SLACK_DEG
     }
 
     /// The looks of a scan, as offsets from the grid heading (counter-clockwise degrees); a
@@ -293,12 +305,14 @@ impl Pilot {
     }
 
     /// Keeps the newest reading if it arrived while a turn or a look past one, started at
-    /// `since`, runs towards `target_deg` from the stored pose's heading (module docs, "Readings
-    /// in turns").
+    /// `since`, runs towards `target_deg` from the stored pose's heading, and the heading lies
+    /// within `window_deg` of that target (module docs, "Readings in turns").
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn note_turn_reading(
         &mut self,
         now: Instant,
         target_deg: f64,
+        window_deg: f64,
         since: Instant,
         motor: &Motor,
         sensors: &SensorState,
@@ -335,7 +349,7 @@ impl Pilot {
             .clamp(-max_s, max_s);
         robot.yaw_deg += sensors.yaw_rate_dps(now, cfg) * measured_after_sample_s;
         let target = heading_deg(pose.heading) + target_deg;
-        if crate::sensors::wrap180(robot.yaw_deg - target).abs() > TURN_READING_WINDOW_DEG {
+        if crate::sensors::wrap180(robot.yaw_deg - target).abs() > window_deg {
             return;
         }
         tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
@@ -343,26 +357,29 @@ impl Pilot {
         self.keep_on_far_edge(robot, target, range);
     }
 
-    /// After the turn `mv` succeeded (the stored pose faces its new heading): turns on past that
-    /// heading by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back (module
-    /// docs, "Readings in turns"). Off, without a pose, or when the look cannot start, nothing
-    /// happens and the next command follows.
-    pub(super) fn look_past(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+    /// Whether the robot should look past the mapping turn that just succeeded (module docs,
+    /// "Readings in turns"): on, with a pose, and in a mapping task. A trajectory's one
+    /// `MOVE_DONE` ends the whole batch, so after a STOP in it Cute cannot tell which turns were
+    /// made; a look would make a STOP land before the batch's first position more often.
+    pub(super) fn look_wanted(&self) -> bool {
         let s = self.safety;
-        // mapping moves only: a trajectory's MOVE_DONE ends the whole batch, so after a STOP in
-        // it Cute cannot tell which turns were made, and the look would make the turns longer
         let mapping = self.current.as_ref().is_some_and(|t| t.kind == TaskKind::Cartography);
-        if !s.turn_readings || s.look_past_deg <= 0.0 || self.pose.is_none() || !mapping {
-            return;
-        }
-        let past = if mv == Move::Left { s.look_past_deg } else { -s.look_past_deg };
+        s.turn_readings && s.look_past_deg > 0.0 && self.pose.is_some() && mapping
+    }
+
+    /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
+    /// the turn went, by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back.
+    /// When the look cannot start, the next command follows at once.
+    pub(super) fn look_past(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
+        let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
         match motor.start_look(now, past, sensors) {
             Ok(()) => self.stage = Stage::LookingPast { back: false, since: now },
             Err(e) => tracing::warn!(error = %e, "cannot look past the turn"),
         }
     }
 
-    /// Faces the grid heading again after looking past a turn.
+    /// Faces the grid heading again after looking past a turn; if that cannot start, the body
+    /// may face off the heading, and the next move faces it first ([`Motor::rotation_was_cut`]).
     pub(super) fn look_back(
         &mut self,
         now: Instant,
@@ -374,6 +391,7 @@ impl Pilot {
             Ok(()) => self.stage = Stage::LookingPast { back: true, since },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
+                motor.mark_rotation_cut();
                 self.rest_since = now;
                 self.stage = Stage::Next;
             }
