@@ -74,6 +74,8 @@ pub struct CartoStats {
     pub corridor_blocked: u64,
     /// Turns that drove back or forth first to clear a known echo.
     pub turns_shifted: u64,
+    /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
+    pub turns_recentred: u64,
     /// Turns refused: no shift cleared the known echoes.
     pub turns_refused: u64,
     /// Turns that failed (any move error) whose turn back to their start heading was started.
@@ -437,6 +439,12 @@ impl Carto {
         self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
     }
 
+    /// Gives the safety checks a floor plan: points on every surface, in the grid's metric frame
+    /// (`crate::surroundings`), never forgotten.
+    pub fn set_known_surfaces(&mut self, points: Vec<(f64, f64)>) {
+        self.pilot.set_known_surfaces(points);
+    }
+
     /// What the pilot is doing now ([`Pilot::activity`]).
     pub fn activity(&self) -> crate::pilot::Activity {
         self.pilot.activity()
@@ -470,6 +478,7 @@ impl Carto {
             bumps: p.bumps,
             corridor_blocked: p.corridor_blocked,
             turns_shifted: p.turns_shifted,
+            turns_recentred: p.turns_recentred,
             turns_refused: p.turns_refused,
             turns_undone: p.turns_undone,
             turn_readings: p.turn_readings,

@@ -159,6 +159,8 @@ pub struct PilotCounters {
     pub corridor_blocked: u64,
     /// Turns that first drove back or forth to clear a known echo.
     pub turns_shifted: u64,
+    /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
+    pub turns_recentred: u64,
     /// Turns refused: no shift along the heading cleared the known echoes.
     pub turns_refused: u64,
     /// Along-track fixes against a wall seen before (`walls.rs`).
@@ -221,8 +223,13 @@ enum Stage {
     Refacing { mv: Move },
     /// After a mapping turn's `MOVE_DONE`: turning on past the new heading and, once `back`, to
     /// it again, the sonar listening (`pilot/safety.rs`, "Readings in turns"); the look started
-    /// at `since`. The next command waits in the queue.
-    LookingPast { back: bool, since: Instant },
+    /// at `since`. The next command waits in the queue. With `recentre` (a turn made off the
+    /// centre), the look runs before the turn's `MOVE_DONE` and the body then drives back to
+    /// its cell's centre.
+    LookingPast { back: bool, since: Instant, recentre: bool },
+    /// After a turn made off the centre (shifted clear of an echo): driving back to the cell's
+    /// centre before the turn's `MOVE_DONE` (`pilot/safety.rs`, "Back to the centre").
+    Recentring,
 }
 
 /// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
@@ -252,6 +259,8 @@ pub enum Activity {
     TurningBack,
     /// After a turn: turning on past the new heading and back, the sonar listening.
     LookingPastTurn,
+    /// Driving back to the cell's centre after a turn made off it.
+    Recentring,
     /// Facing the grid heading again after a STOP or a disconnect cut a turn.
     Refacing,
 }
@@ -267,6 +276,7 @@ impl Activity {
                 | Activity::ShiftingBeforeTurn
                 | Activity::TurningBack
                 | Activity::LookingPastTurn
+                | Activity::Recentring
                 | Activity::Refacing
         )
     }
@@ -286,6 +296,7 @@ impl Activity {
             Activity::ShiftingBeforeTurn => "shifting before a turn",
             Activity::TurningBack => "turning back after a failed turn",
             Activity::LookingPastTurn => "looking past the end of a turn",
+            Activity::Recentring => "driving back to the cell's centre after a turn off it",
             Activity::Refacing => "facing the grid heading again after a cut turn",
         }
     }
@@ -381,8 +392,14 @@ impl Pilot {
             Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
             Stage::TurningBack { .. } => Activity::TurningBack,
             Stage::LookingPast { .. } => Activity::LookingPastTurn,
+            Stage::Recentring => Activity::Recentring,
             Stage::Refacing { .. } => Activity::Refacing,
         }
+    }
+
+    /// Gives the safety checks a floor plan ([`crate::Carto::set_known_surfaces`]).
+    pub fn set_known_surfaces(&mut self, points: Vec<(f64, f64)>) {
+        self.surroundings.set_fixed(points);
     }
 
     /// Whether a task runs or waits.
@@ -577,7 +594,7 @@ impl Pilot {
                     {
                         // the turn's MOVE_DONE has gone out: Cute and Carto hold the new heading
                         // whatever cuts the look; the next command waits in the queue
-                        self.look_past(now, turn, motor, sensors);
+                        self.look_past(now, turn, false, motor, sensors);
                         continue;
                     }
                     if self.current.is_none() {
@@ -680,7 +697,7 @@ impl Pilot {
                             self.move_succeeded(kind);
                             self.stage = Stage::Next;
                             if kind.is_turn() {
-                                self.look_pending = self.look_wanted().then_some(kind);
+                                self.turn_made(now, kind, motor, sensors);
                             }
                         }
                         Some(Err(e)) => {
@@ -734,27 +751,42 @@ impl Pilot {
                     }
                     Some(Err(e)) => self.refacing_failed(now, mv, motor, sensors, &e.to_string()),
                 },
-                Stage::LookingPast { back, since } => {
+                Stage::LookingPast { back, since, recentre } => {
                     let window = self.safety.look_window_deg();
                     self.note_turn_reading(now, 0.0, window, since, motor, sensors, us);
                     match motor.take_outcome() {
                         None if motor.is_busy() => return,
-                        None | Some(Ok(())) if !back => self.look_back(now, since, motor, sensors),
+                        None | Some(Ok(())) if !back => self.look_back(now, since, recentre, motor, sensors),
                         Some(Err(e)) if !back => {
                             tracing::warn!(error = %e, "looking past a turn failed: facing the heading again");
-                            self.look_back(now, since, motor, sensors);
+                            self.look_back(now, since, recentre, motor, sensors);
                         }
                         outcome => {
-                            if let Some(Err(e)) = outcome {
-                                // the motor marked the rotation cut: the next move faces the
-                                // heading first
-                                tracing::warn!(error = %e, "facing the heading again after looking past a turn failed");
-                            }
                             self.rest_since = now;
                             self.stage = Stage::Next;
+                            match outcome {
+                                // the motor marked the rotation cut: the next move faces the
+                                // heading first, from where the body is
+                                Some(Err(e)) => tracing::warn!(
+                                    error = %e,
+                                    "facing the heading again after looking past a turn failed"
+                                ),
+                                _ if recentre => self.recentre(now, motor, sensors),
+                                _ => {}
+                            }
                         }
                     }
                 }
+                Stage::Recentring => match motor.take_outcome() {
+                    None if motor.is_busy() => return,
+                    outcome => {
+                        if let Some(Err(e)) = outcome {
+                            tracing::warn!(error = %e, "driving back to the cell's centre after a turn failed");
+                        }
+                        self.rest_since = now;
+                        self.stage = Stage::Next;
+                    }
+                },
                 Stage::BackingOff => match motor.take_outcome() {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.end_task(now),

@@ -28,6 +28,11 @@
 //! A point is an estimate: the echo may come from anywhere in the cone at that range; the
 //! central ray is the best single guess, and the margins absorb the rest.
 //!
+//! A floor plan can be given too ([`Surroundings::set_fixed`], [`crate::Carto::set_known_surfaces`]):
+//! points on the room's surfaces, which the checks treat as echoes and which nothing clears or
+//! forgets. The twin uses it for `--known-room` runs, which take the sonar's blind spots out of
+//! the picture (README, "Perfect perception").
+//!
 //! ```
 //! use carto::surroundings::{Pose2, Surroundings};
 //! let mut s = Surroundings::default();
@@ -76,6 +81,8 @@ impl Pose2 {
 #[derive(Debug, Clone, Default)]
 pub struct Surroundings {
     points: VecDeque<(f64, f64)>,
+    /// Points known beforehand (a floor plan), never cleared nor forgotten.
+    fixed: Vec<(f64, f64)>,
 }
 
 impl Surroundings {
@@ -143,17 +150,28 @@ impl Surroundings {
         });
     }
 
+    /// Sets the points known beforehand (a floor plan in the grid's metric frame): the checks
+    /// treat them as echoes, and nothing clears them.
+    pub fn set_fixed(&mut self, points: Vec<(f64, f64)>) {
+        self.fixed = points;
+    }
+
+    /// The echo points and the floor plan's.
+    fn all(&self) -> impl Iterator<Item = &(f64, f64)> {
+        self.points.iter().chain(self.fixed.iter())
+    }
+
     /// Forgets every point (a new pose from Cute: the old points were placed from another one).
     pub fn clear(&mut self) {
         self.points.clear();
     }
 
-    /// Points kept.
+    /// Echo points kept (the floor plan's not counted).
     pub fn len(&self) -> usize {
         self.points.len()
     }
 
-    /// Whether no point is kept.
+    /// Whether no echo point is kept.
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
     }
@@ -167,8 +185,7 @@ impl Surroundings {
         to_m: f64,
         half_width_m: f64,
     ) -> Option<(f64, f64)> {
-        self.points
-            .iter()
+        self.all()
             .map(|&p| robot.local(p))
             .filter(|&(along, left)| along >= from_m && along <= to_m && left.abs() <= half_width_m)
             .min_by(|a, b| a.0.total_cmp(&b.0))
@@ -188,9 +205,12 @@ impl Surroundings {
         step_m: f64,
         across: bool,
     ) -> Option<(f64, f64)> {
+        let reach = radius_m + 2.0 * max_m;
+        let near: Vec<(f64, f64)> =
+            self.all().copied().filter(|&(x, y)| (x - robot.x).hypot(y - robot.y) < reach).collect();
         let clears = |(along, left): (f64, f64)| {
             let (x, y) = robot.offset(along, left);
-            self.inside_circle(Pose2 { x, y, ..robot }, radius_m).is_none()
+            !near.iter().any(|&(px, py)| (px - x).hypot(py - y) < radius_m)
         };
         let steps = (max_m / step_m).floor() as i32;
         let along = (2..=steps).flat_map(|k| [-k, k]).map(|k| (f64::from(k) * step_m, 0.0));
@@ -211,8 +231,7 @@ impl Surroundings {
 
     /// The nearest point, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
     pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
-        self.points
-            .iter()
+        self.all()
             .map(|&p| robot.local(p))
             .filter(|&(along, left)| along.hypot(left) < radius_m)
             .min_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)))
@@ -224,6 +243,32 @@ mod tests {
     use super::*;
 
     const MOUNT: f64 = 0.13;
+
+    #[test]
+    fn floor_plan_points_block_like_echoes_and_are_never_cleared() {
+        let robot = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        let blocked = |s: &Surroundings| {
+            s.first_in_corridor(robot, MOUNT, 0.58, 0.14)
+                .is_some_and(|(along, left)| (along - 0.30).abs() < 1e-9 && (left - 0.10).abs() < 1e-9)
+        };
+        let mut s = Surroundings::default();
+        // a leg 30 cm ahead, 10 cm left: in the body's path, outside the turning circle
+        s.set_fixed(vec![(0.30, 0.10)]);
+        assert!(blocked(&s));
+        assert!(s.inside_circle(robot, 0.197).is_none());
+        // a reading that sees through it, the body standing on it, a new pose: it stays
+        s.add_reading(robot, MOUNT, Some(1.0), 7.5, 4.0);
+        s.clear_footprint(Pose2 { x: 0.30, ..robot }, 0.13, 0.12);
+        s.clear();
+        assert!(blocked(&s));
+        assert!(s.is_empty(), "the floor plan's points are not echo points");
+        // a turn 18 cm beside it shifts until the circle clears it
+        let beside = Pose2 { x: 0.30, y: -0.08, yaw_deg: 0.0 };
+        assert!(s.inside_circle(beside, 0.197).is_some());
+        let (along, left) = s.clearing_shift(beside, 0.197, 0.11, 0.01, true).expect("a shift clears it");
+        let shifted = Pose2 { x: 0.30 + along, y: -0.08 + left, yaw_deg: 0.0 };
+        assert!(s.inside_circle(shifted, 0.197).is_none());
+    }
 
     #[test]
     fn a_corner_needs_a_shift_across_the_heading() {

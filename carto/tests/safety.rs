@@ -33,19 +33,59 @@ fn blocked_forward(h: &mut Harness, cm: f32) {
 }
 
 #[test]
-fn a_turn_beside_a_wall_ahead_backs_off_first() {
+fn a_turn_beside_a_wall_ahead_backs_off_first_and_drives_back_to_the_centre_before_its_move_done() {
     let mut h = ready_with(fake::test_config());
     blocked_forward(&mut h, 3.0); // the wall 16 cm from the centre, inside the 19.7 cm circle
     let x0 = h.robot.x;
     h.send(cartography(Command::Right));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 2), "no MOVE_DONE for the turn");
+    let mut back = 0.0f64;
+    for _ in 0..12_000 {
+        back = back.max(x0 - h.robot.x);
+        h.run_ms(1);
+        if h.move_done_count() == 2 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 2, "no MOVE_DONE for the turn");
     let stats = h.carto.stats();
-    assert_eq!((stats.turns_shifted, stats.turns_refused), (1, 0));
-    // it backed off (west, -x) far enough that the circle clears the echo, then turned
-    let back = x0 - h.robot.x;
+    assert_eq!((stats.turns_shifted, stats.turns_refused, stats.turns_recentred), (1, 0, 1));
+    // it backed off (west, -x) far enough that the circle clears the echo, turned there, and
+    // was back at the centre when the MOVE_DONE went out
     assert!((0.03..=0.06).contains(&back), "backed off {back:.3} m");
+    assert!((h.robot.x - x0).abs() <= 0.015, "ended {:.3} m from the centre", h.robot.x - x0);
     assert!((h.robot.yaw.to_degrees() + 90.0).abs() <= 2.0, "yaw {:.1}", h.robot.yaw.to_degrees());
     assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::South));
+}
+
+#[test]
+fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows() {
+    // a 5 cm clearance, so that the surface bars a good part of the way back, and 0.45 m cells,
+    // so that a shift may reach 11 cm
+    let mut h = ready_with(CartoConfig { clearance_m: 0.05, cell_size_m: 0.45, ..fake::test_config() });
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    // a floor plan with one point 13.5 cm east of cell (5, 5)'s centre, 5 mm ahead of the front
+    // face: inside the 22.7 cm turning circle, so the RIGHT first backs off 10 cm west. Facing
+    // SOUTH, the body and its clearance reach 17 cm east: the way back ends 3.5 cm short of
+    // the centre
+    h.carto.set_known_surfaces(vec![(5.0 * 0.45 + 0.135, -5.0 * 0.45)]);
+    let x0 = h.robot.x;
+    h.send(cartography(Command::Right));
+    let mut back = 0.0f64;
+    for _ in 0..12_000 {
+        back = back.max(x0 - h.robot.x);
+        h.run_ms(1);
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
+    assert!((0.09..=0.11).contains(&back), "backed off {back:.3} m");
+    let stats = h.carto.stats();
+    assert_eq!((stats.turns_shifted, stats.turns_recentred), (1, 1));
+    let west = x0 - h.robot.x;
+    assert!((0.03..=0.05).contains(&west), "stands {west:.3} m west of the centre");
+    assert!((h.robot.yaw.to_degrees() + 90.0).abs() <= 2.0, "yaw {:.1}", h.robot.yaw.to_degrees());
 }
 
 #[test]

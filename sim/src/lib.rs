@@ -9,6 +9,7 @@ pub mod grid;
 pub mod localisation;
 pub mod mapimg;
 pub mod mission;
+pub mod oracle;
 pub mod output;
 pub mod pacing;
 pub mod picture;

@@ -192,6 +192,10 @@ pub struct Report {
     pub scenario: String,
     /// Seed of the run.
     pub seed: u64,
+    /// Carto was given every surface of the room beforehand (`--known-room`): a ceiling for
+    /// perfect perception, not what the robot's sensors achieve. Written only when set.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub known_room: bool,
     /// Simulated time at the end, seconds.
     pub sim_time_s: f64,
     /// Wall-clock time the run took, seconds (not part of the determinism hash).
@@ -355,6 +359,13 @@ impl Report {
     pub fn to_text(&self) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "scenario        {} (seed {})", self.scenario, self.seed);
+        if self.known_room {
+            let _ = writeln!(
+                s,
+                "known room      Carto was given every surface of the room (--known-room): a ceiling \
+                 for perfect perception, not what the sonar achieves"
+            );
+        }
         let _ = writeln!(
             s,
             "time            {:.1} s simulated in {:.2} s wall ({:.0}x real time, {} steps)",
@@ -503,6 +514,7 @@ mod tests {
         Report {
             scenario: "t".into(),
             seed: 1,
+            known_room: false,
             sim_time_s: 10.0,
             wall_time_s: 0.01,
             real_time_factor: 1000.0,

@@ -171,12 +171,16 @@ impl Lockstep {
         let (sensor_carto, sensor_board_end) =
             board_link("sensor", profile.serial.sensor_baud, &scenario.links.sensor, 0x0000_7365_6e73_6f72);
         let (listener, connector) = mem_listener(None, clock.clone());
-        let carto = CartoRuntime::new(
+        let mut carto = CartoRuntime::new(
             Carto::new(CartoConfig::from_profile(profile)),
             listener,
             motor_carto,
             sensor_carto,
         );
+        if loaded.known_room() {
+            let points = crate::oracle::surface_points(scenario, &truth.frame, crate::oracle::SPACING_M);
+            carto.carto_mut().set_known_surfaces(points);
+        }
         let cute = Cute::new(CuteConfig {
             rows: truth.rows,
             cols: truth.cols,

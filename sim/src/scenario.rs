@@ -297,6 +297,7 @@ pub struct LoadedScenario {
     pub label: String,
     truth: RobotTruth,
     dt: Duration,
+    known_room: bool,
 }
 
 impl Scenario {
@@ -377,6 +378,18 @@ impl Obstacle {
 }
 
 impl LoadedScenario {
+    /// With `on`, runs give Carto every surface of the room beforehand (`--known-room`,
+    /// [`crate::oracle`]): what the rest of the system does with perfect perception.
+    pub fn with_known_room(mut self, on: bool) -> LoadedScenario {
+        self.known_room = on;
+        self
+    }
+
+    /// Whether runs give Carto the room's surfaces ([`LoadedScenario::with_known_room`]).
+    pub fn known_room(&self) -> bool {
+        self.known_room
+    }
+
     /// The grid's placement in the world.
     pub fn frame(&self) -> GridFrame {
         self.truth.frame
@@ -560,6 +573,7 @@ impl LoadedScenario {
             label: label.to_string(),
             truth,
             dt,
+            known_room: false,
         })
     }
 }

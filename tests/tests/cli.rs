@@ -94,3 +94,23 @@ fn bench_prints_every_sonar_variant_with_median_and_best() {
     let collisions: Vec<&str> = rows.iter().map(|r| r[5]).collect();
     assert!(collisions.iter().all(|c| *c == collisions[0]), "{text}");
 }
+
+#[test]
+fn a_known_room_run_says_so_in_its_report_and_is_refused_in_the_window() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-known-{}", std::process::id()));
+    let out =
+        explobot().args(["run", "scenarios/empty.ron", "--known-room", "--out"]).arg(&dir).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(text.contains("known room      Carto was given every surface of the room"), "{text}");
+    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    assert!(report.contains("\"known_room\": true"), "{report}");
+    // a plain run's report has no such field
+    let plain = explobot().args(["run", "scenarios/empty.ron", "--out"]).arg(&dir).output().unwrap();
+    assert_eq!(plain.status.code(), Some(0));
+    assert!(!std::fs::read_to_string(dir.join("report.json")).unwrap().contains("known_room"));
+    let out = explobot().args(["run", "--window", "--known-room"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--known-room is for headless runs and sweeps"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

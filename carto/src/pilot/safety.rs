@@ -24,6 +24,15 @@
 //!   no message that could carry the reason, so Cute takes the turn as done (a known limit,
 //!   README "Safety checks"). A shift that ends outside its tolerance is checked again from
 //!   where the robot believes it stopped: the turn runs if the circle is clear from there.
+//! - **Back to the centre.** A turn made more than [`RECENTRE_FROM_M`] from its cell's centre
+//!   (after such a shift) ends with the body driving back to the centre, holding the new
+//!   heading, before the turn's `MOVE_DONE`: Cute believes the robot stands at its cell's
+//!   centre, the next FORWARD's corridor check is made from there, and issue 10 holds the robot
+//!   within 5 cm of it at every `MOVE_DONE` (a 9 cm shift used to stay in the position error).
+//!   Mapping, the look past the turn runs first, where the turning circle was clear. The drive
+//!   back is skipped when a known echo lies in the body's rectangle plus the clearance anywhere
+//!   on the way (the body turned 90° is 1 cm longer across the old heading than before): the
+//!   robot then stays where it turned, and the next FORWARD takes the offset back.
 //!
 //! - **Along-track fix.** Two straight readings at rest, before and after one successful FORWARD
 //!   along the same heading, both with an echo closer than [`ALONG_FIX_MAX_M`], say how far the
@@ -105,6 +114,10 @@ use crate::ultrasound::Ultrasound;
 
 /// Step of the shift search before a turn, metres.
 const SHIFT_STEP_M: f64 = 0.01;
+/// A turn made farther than this from its cell's centre is followed by a drive back to the
+/// centre, metres: a move ends within 1 cm, a shift is at least 2 cm, and issue 10 holds the
+/// robot within 5 cm of the centre of the cell Cute believes at every `MOVE_DONE`.
+const RECENTRE_FROM_M: f64 = 0.03;
 /// Echoes further than this are not used for the along-track fix (the cone widens), metres.
 pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
@@ -370,11 +383,86 @@ impl Pilot {
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
     /// the turn went, by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back.
     /// When the look cannot start, the next command follows at once.
-    pub(super) fn look_past(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn look_past(
+        &mut self,
+        now: Instant,
+        turn: Move,
+        recentre: bool,
+        motor: &mut Motor,
+        sensors: &SensorState,
+    ) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
         match motor.start_look(now, past, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now },
-            Err(e) => tracing::warn!(error = %e, "cannot look past the turn"),
+            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now, recentre },
+            Err(e) => {
+                tracing::warn!(error = %e, "cannot look past the turn");
+                if recentre {
+                    self.recentre(now, motor, sensors);
+                }
+            }
+        }
+    }
+
+    /// A turn succeeded (the stored pose faces its new heading). Made at its cell's centre, the
+    /// task ends and, mapping, the robot looks past the turn after its `MOVE_DONE`. Made off the
+    /// centre (shifted clear of an echo), the look runs at once, where the turning circle was
+    /// clear, and the body then drives back to the centre before the `MOVE_DONE` ("Back to the
+    /// centre" in the module docs).
+    pub(super) fn turn_made(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
+        let off = motor.odometry().offset();
+        if self.pose.is_none() || off.along_m.hypot(off.left_m) <= RECENTRE_FROM_M {
+            self.look_pending = self.look_wanted().then_some(turn);
+        } else if self.look_wanted() {
+            self.look_past(now, turn, true, motor, sensors);
+        } else {
+            self.recentre(now, motor, sensors);
+        }
+    }
+
+    /// Drives the body back to its cell's centre, holding the heading, when the way there is
+    /// clear of known echoes ("Back to the centre" in the module docs); otherwise the task ends
+    /// where the body is.
+    pub(super) fn recentre(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+        let off = motor.odometry().offset();
+        let Some(robot) = self.believed(motor, sensors) else {
+            return;
+        };
+        if off.along_m.hypot(off.left_m) <= RECENTRE_FROM_M {
+            return;
+        }
+        let s = self.safety;
+        let (hl, hw) = (s.half_length_m + s.clearance_m, s.half_width_m + s.clearance_m);
+        // from where the body is towards the centre, as far as the way is clear
+        let steps = (off.along_m.hypot(off.left_m) / SHIFT_STEP_M).ceil() as i32;
+        let clear_to = (1..=steps)
+            .map(|k| f64::from(k) / f64::from(steps))
+            .take_while(|&t| {
+                let (x, y) = robot.offset(-off.along_m * t, -off.left_m * t);
+                self.surroundings.first_in_corridor(Pose2 { x, y, ..robot }, -hl, hl, hw).is_none()
+            })
+            .last()
+            .unwrap_or(0.0);
+        let (along, left) = (-off.along_m * clear_to, -off.left_m * clear_to);
+        if along.hypot(left) < 2.0 * SHIFT_STEP_M {
+            tracing::info!(
+                along = off.along_m,
+                left = off.left_m,
+                "turned off the centre: an echo bars the way back, staying"
+            );
+            return;
+        }
+        tracing::info!(
+            along = off.along_m,
+            left = off.left_m,
+            part = clear_to,
+            "turned off the centre: driving back towards it"
+        );
+        match motor.start_shift(now, along, left, sensors) {
+            Ok(()) => {
+                self.counters.turns_recentred += 1;
+                self.stage = Stage::Recentring;
+            }
+            Err(e) => tracing::warn!(error = %e, "cannot drive back to the cell's centre after a turn"),
         }
     }
 
@@ -384,11 +472,12 @@ impl Pilot {
         &mut self,
         now: Instant,
         since: Instant,
+        recentre: bool,
         motor: &mut Motor,
         sensors: &SensorState,
     ) {
         match motor.start_look(now, 0.0, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: true, since },
+            Ok(()) => self.stage = Stage::LookingPast { back: true, since, recentre },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
                 motor.mark_rotation_cut();

@@ -24,6 +24,7 @@ impl Lockstep {
         let mut report = Report {
             scenario: scenario.name.clone(),
             seed: self.seed,
+            known_room: self.loaded.known_room(),
             sim_time_s,
             wall_time_s,
             real_time_factor: sim_time_s / wall_time_s.max(1e-9),

@@ -181,6 +181,14 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
         .as_ref()
         .map_or("each room's own seed".into(), |x| format!("seeds {}", seeds_text(&x.0)));
     let _ = writeln!(s, "{} rooms × {seeds}: {} runs.", manifest.rooms.len(), manifest.runs);
+    if manifest.known_room {
+        let _ = writeln!(
+            s,
+            "\n**Known room** (`--known-room`): Carto was given every surface of each room beforehand, as if \
+             its sonar saw everything. These figures are a ceiling for perfect perception, not what the \
+             robot achieves."
+        );
+    }
     if records.len() != manifest.runs {
         let _ = writeln!(s, "This folder holds {} of them (one shard).", records.len());
     }

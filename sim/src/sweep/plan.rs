@@ -271,6 +271,9 @@ pub struct Manifest {
     pub seeds: Option<Seeds>,
     /// The rooms: id, scenario name, SHA-256 of the scenario text.
     pub rooms: Vec<ManifestRoom>,
+    /// `--known-room`: Carto was given each room's surfaces. Written only when set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub known_room: bool,
 }
 
 /// A room in `sweep.json`.
@@ -288,23 +291,27 @@ pub struct ManifestRoom {
 pub const FORMAT: u32 = 1;
 
 impl Plan {
-    /// Loads every scenario file, generates every room and lays out the runs.
+    /// Loads every scenario file, generates every room and lays out the runs; with
+    /// `known_room`, every run gives Carto the room's surfaces (`--known-room`).
     pub fn build(
         files: &[PathBuf],
         generated: &[GenerateSpec],
         seeds: Option<&Seeds>,
+        known_room: bool,
     ) -> Result<Plan, SweepError> {
         let mut rooms = Vec::new();
         for path in files {
-            let loaded = LoadedScenario::load(path).map_err(SweepError::Scenario)?;
+            let loaded =
+                LoadedScenario::load(path).map_err(SweepError::Scenario)?.with_known_room(known_room);
             rooms.push(Room { id: path.display().to_string(), source: Source::File(path.clone()), loaded });
         }
         for spec in generated {
             for seed in 1..=spec.count {
                 let text = generate(spec.style, seed).map_err(SweepError::Generate)?.to_ron();
                 let id = format!("gen:{}:{seed}", spec.style.name());
-                let loaded =
-                    LoadedScenario::from_ron_str(&text, &id, Path::new(".")).map_err(SweepError::Scenario)?;
+                let loaded = LoadedScenario::from_ron_str(&text, &id, Path::new("."))
+                    .map_err(SweepError::Scenario)?
+                    .with_known_room(known_room);
                 rooms.push(Room { id, source: Source::Generated { style: spec.style, seed }, loaded });
             }
         }
@@ -333,6 +340,7 @@ impl Plan {
                     sha256: hex::encode(Sha256::digest(r.loaded.text.as_bytes())),
                 })
                 .collect(),
+            known_room,
         };
         Ok(Plan { rooms, runs, manifest })
     }
