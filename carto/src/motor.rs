@@ -386,9 +386,9 @@ impl Motor {
     /// Undoes a turn that failed (any [`MoveError`]: jammed, timed out, not converged, a stale
     /// reading): turns back to the grid heading it started from, which is the reference again
     /// from now on, also when the turn back fails (it runs as a look, which leaves the reference
-    /// alone; [`Motor::learn_reference`] re-learns it if the body ends more than 20° away). The
-    /// way back is the way the body just came, so it is free unless the body was pushed. Only
-    /// once per failed turn.
+    /// alone; a failed look counts as cut, so the next move faces the reference again first,
+    /// [`Motor::rotation_was_cut`]). The way back is the way the body just came, so it is free
+    /// unless the body was pushed. Only once per failed turn.
     pub fn start_turn_back(&mut self, now: Instant, s: &SensorState) -> Result<(), MoveError> {
         let from = self.turn_from_deg.take().ok_or(MoveError::NothingToTurnBack)?;
         self.fresh_yaw(now, s)?;
@@ -445,6 +445,16 @@ impl Motor {
     pub fn forget_reference(&mut self) {
         self.reference_deg = None;
         self.rotation_cut = false;
+    }
+
+    /// Turns the reference heading by `delta_deg` (counter-clockwise) without moving: a turn
+    /// made is taken back ([`crate::pilot`], a cut before its `MOVE_DONE`). The odometry's offset
+    /// is expressed in the new frame.
+    pub fn turn_reference(&mut self, delta_deg: f64) {
+        if let Some(r) = self.reference_deg.as_mut() {
+            *r += delta_deg;
+            self.odo.set_frame(*r);
+        }
     }
 
     /// Notes that the body may face off the reference heading (a look back that could not

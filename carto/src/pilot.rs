@@ -223,13 +223,13 @@ enum Stage {
     Refacing { mv: Move },
     /// After a mapping turn's `MOVE_DONE`: turning on past the new heading and, once `back`, to
     /// it again, the sonar listening (`pilot/safety.rs`, "Readings in turns"); the look started
-    /// at `since`. The next command waits in the queue. With `recentre` (a turn made off the
-    /// centre), the look runs before the turn's `MOVE_DONE` and the body then drives back to
-    /// its cell's centre.
-    LookingPast { back: bool, since: Instant, recentre: bool },
-    /// After a turn made off the centre (shifted clear of an echo): driving back to the cell's
-    /// centre before the turn's `MOVE_DONE` (`pilot/safety.rs`, "Back to the centre").
-    Recentring,
+    /// at `since`. The next command waits in the queue. With `unacked` (a mapping turn made off
+    /// the centre), the look runs before that turn's `MOVE_DONE` and the body then drives back
+    /// to its cell's centre.
+    LookingPast { back: bool, since: Instant, unacked: Option<Move> },
+    /// After the turn `turn`, made off the centre: driving back to the cell's centre before its
+    /// `MOVE_DONE` (`pilot/safety.rs`, "Back to the centre").
+    Recentring { turn: Move },
 }
 
 /// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
@@ -261,7 +261,8 @@ pub enum Activity {
     LookingPastTurn,
     /// Driving back to the cell's centre after a turn made off it.
     Recentring,
-    /// Facing the grid heading again after a STOP or a disconnect cut a turn.
+    /// Facing the grid heading again after a STOP or a disconnect cut a turn or a look, or a look
+    /// failed.
     Refacing,
 }
 
@@ -392,7 +393,7 @@ impl Pilot {
             Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
             Stage::TurningBack { .. } => Activity::TurningBack,
             Stage::LookingPast { .. } => Activity::LookingPastTurn,
-            Stage::Recentring => Activity::Recentring,
+            Stage::Recentring { .. } => Activity::Recentring,
             Stage::Refacing { .. } => Activity::Refacing,
         }
     }
@@ -439,6 +440,7 @@ impl Pilot {
                         // the next move still ends on a cell centre.
                         if self.pose != Some(pose) {
                             self.look_pending = None;
+                            self.reface_failures = 0;
                             if motor.rotation_was_cut() {
                                 // the body faces where the new pose says: learn it from the IMU
                                 motor.forget_reference();
@@ -549,6 +551,13 @@ impl Pilot {
         motor.stop(now);
         self.last_straight = None;
         self.look_pending = None;
+        self.reface_failures = 0;
+        let mapping = self.current.as_ref().is_some_and(|t| t.kind == TaskKind::Cartography);
+        if let (Stage::LookingPast { unacked: Some(turn), .. } | Stage::Recentring { turn }, true) =
+            (self.stage, mapping)
+        {
+            self.unmake_turn(turn, motor);
+        }
         if !matches!(self.stage, Stage::Next) {
             // stopped in the middle of a scan or a shift: the robot may face off the grid heading
             // and is somewhere Carto did not plan; what it saw from there is not trusted
@@ -559,6 +568,25 @@ impl Pilot {
         self.batch = None;
         self.stage = Stage::Next;
         self.rest_since = now;
+    }
+
+    /// A STOP or a disconnect cut the look or the drive back after the mapping turn `turn`
+    /// (made off the centre), before its `MOVE_DONE`: for Cute that turn did not happen, so Carto
+    /// takes back its stored heading and reference, and the next move faces that heading again
+    /// first ([`Motor::rotation_was_cut`]), as after a turn cut in the middle. Keeping the new
+    /// heading put the body 90° off the heading both held once Cute re-sent its pose and the
+    /// turn.
+    fn unmake_turn(&mut self, turn: Move, motor: &mut Motor) {
+        let Some(pose) = self.pose.as_mut() else {
+            return;
+        };
+        pose.heading = if turn == Move::Left { pose.heading.right() } else { pose.heading.left() };
+        motor.turn_reference(if turn == Move::Left { -90.0 } else { 90.0 });
+        motor.mark_rotation_cut();
+        tracing::info!(
+            ?pose,
+            "cut before the MOVE_DONE of a turn made off the centre: the turn is taken back"
+        );
     }
 
     /// Ends the current task (completed or aborted): `MOVE_DONE`, back to the next task.
@@ -594,7 +622,7 @@ impl Pilot {
                     {
                         // the turn's MOVE_DONE has gone out: Cute and Carto hold the new heading
                         // whatever cuts the look; the next command waits in the queue
-                        self.look_past(now, turn, false, motor, sensors);
+                        self.look_past(now, turn, None, motor, sensors);
                         continue;
                     }
                     if self.current.is_none() {
@@ -751,15 +779,15 @@ impl Pilot {
                     }
                     Some(Err(e)) => self.refacing_failed(now, mv, motor, sensors, &e.to_string()),
                 },
-                Stage::LookingPast { back, since, recentre } => {
+                Stage::LookingPast { back, since, unacked } => {
                     let window = self.safety.look_window_deg();
                     self.note_turn_reading(now, 0.0, window, since, motor, sensors, us);
                     match motor.take_outcome() {
                         None if motor.is_busy() => return,
-                        None | Some(Ok(())) if !back => self.look_back(now, since, recentre, motor, sensors),
+                        None | Some(Ok(())) if !back => self.look_back(now, since, unacked, motor, sensors),
                         Some(Err(e)) if !back => {
                             tracing::warn!(error = %e, "looking past a turn failed: facing the heading again");
-                            self.look_back(now, since, recentre, motor, sensors);
+                            self.look_back(now, since, unacked, motor, sensors);
                         }
                         outcome => {
                             self.rest_since = now;
@@ -771,13 +799,16 @@ impl Pilot {
                                     error = %e,
                                     "facing the heading again after looking past a turn failed"
                                 ),
-                                _ if recentre => self.recentre(now, motor, sensors),
-                                _ => {}
+                                _ => {
+                                    if let Some(turn) = unacked {
+                                        self.recentre(now, turn, motor, sensors);
+                                    }
+                                }
                             }
                         }
                     }
                 }
-                Stage::Recentring => match motor.take_outcome() {
+                Stage::Recentring { .. } => match motor.take_outcome() {
                     None if motor.is_busy() => return,
                     outcome => {
                         if let Some(Err(e)) = outcome {

@@ -32,21 +32,27 @@ fn blocked_forward(h: &mut Harness, cm: f32) {
     assert!(h.reply_msgs().contains(&GuiMessage::SetObstaclePosition { x: 5, y: 6 }) || done > 0);
 }
 
+/// Runs until the `n`th MOVE_DONE (at most 12 s), returning the largest `f(&h)` seen on the way.
+fn run_to_move_done_tracking(h: &mut Harness, n: usize, f: impl Fn(&Harness) -> f64) -> f64 {
+    let mut most = f64::MIN;
+    for _ in 0..12_000 {
+        most = most.max(f(h));
+        h.run_ms(1);
+        if h.move_done_count() == n {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), n, "no MOVE_DONE number {n}");
+    most
+}
+
 #[test]
 fn a_turn_beside_a_wall_ahead_backs_off_first_and_drives_back_to_the_centre_before_its_move_done() {
     let mut h = ready_with(fake::test_config());
     blocked_forward(&mut h, 3.0); // the wall 16 cm from the centre, inside the 19.7 cm circle
     let x0 = h.robot.x;
     h.send(cartography(Command::Right));
-    let mut back = 0.0f64;
-    for _ in 0..12_000 {
-        back = back.max(x0 - h.robot.x);
-        h.run_ms(1);
-        if h.move_done_count() == 2 {
-            break;
-        }
-    }
-    assert_eq!(h.move_done_count(), 2, "no MOVE_DONE for the turn");
+    let back = run_to_move_done_tracking(&mut h, 2, |h| x0 - h.robot.x);
     let stats = h.carto.stats();
     assert_eq!((stats.turns_shifted, stats.turns_refused, stats.turns_recentred), (1, 0, 1));
     // it backed off (west, -x) far enough that the circle clears the echo, turned there, and
@@ -71,15 +77,7 @@ fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows(
     h.carto.set_known_surfaces(vec![(5.0 * 0.45 + 0.135, -5.0 * 0.45)]);
     let x0 = h.robot.x;
     h.send(cartography(Command::Right));
-    let mut back = 0.0f64;
-    for _ in 0..12_000 {
-        back = back.max(x0 - h.robot.x);
-        h.run_ms(1);
-        if h.move_done_count() == 1 {
-            break;
-        }
-    }
-    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the turn");
+    let back = run_to_move_done_tracking(&mut h, 1, |h| x0 - h.robot.x);
     assert!((0.09..=0.11).contains(&back), "backed off {back:.3} m");
     let stats = h.carto.stats();
     assert_eq!((stats.turns_shifted, stats.turns_recentred), (1, 1));
@@ -637,4 +635,43 @@ fn after_three_refacings_that_jam_the_heading_is_learnt_again_and_the_robot_move
     h.send(cartography(Command::Forward));
     assert!(h.run_until(12_000, |h| h.move_done_count() == 4), "no fourth MOVE_DONE");
     assert_eq!(h.reply_msgs()[3..], [GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
+}
+
+/// A wall 3 cm ahead, then a RIGHT, which backs off before it turns and, made off the centre,
+/// looks and drives back before its MOVE_DONE; the link drops when Carto does `cut_in`. Cute
+/// never got that MOVE_DONE: on reconnect it re-sends its pose (EAST) and the RIGHT. Returns the
+/// harness once the second RIGHT is done.
+fn disconnect_before_an_off_centre_turns_move_done(cut_in: carto::pilot::Activity) -> Harness {
+    let mut h = ready_with(fake::test_config());
+    blocked_forward(&mut h, 3.0);
+    h.robot.distance_cm = -1.0;
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(12_000, |h| h.carto.activity() == cut_in), "never {cut_in:?}");
+    h.run_ms(80);
+    assert_eq!(h.move_done_count(), 1, "the RIGHT's MOVE_DONE went out before {cut_in:?}");
+    h.carto.on_client_disconnected(h.now);
+    h.run_ms(500);
+    h.carto.on_client_connected(h.now, "cute again");
+    h.replies.clear();
+    h.send(POSE);
+    h.run_ms(50);
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(20_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the RIGHT sent again");
+    h.run_ms(3000);
+    h
+}
+
+#[test]
+fn a_disconnect_before_the_move_done_of_a_turn_made_off_the_centre_takes_the_turn_back() {
+    use carto::pilot::Activity;
+    for cut_in in [Activity::LookingPastTurn, Activity::Recentring] {
+        let h = disconnect_before_an_off_centre_turns_move_done(cut_in);
+        // Cute and Carto hold SOUTH after the one RIGHT Cute knows of, and so does the body
+        assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(robot_model::grid::Heading::South));
+        let cw = h.robot.heading_cw_deg();
+        assert!(
+            (cw - 90.0).abs() <= 3.0,
+            "cut in {cut_in:?}: the body faces {cw:.1}° clockwise, SOUTH is 90"
+        );
+    }
 }

@@ -502,11 +502,10 @@ fn move_timeout_is_reported_and_stops_the_robot() {
     cute.take_outgoing();
     cute.start_cartography().unwrap();
     assert_eq!(cute.take_outgoing(), [0x00, 0x03, 0x02, 0x00, 0x00]);
-    // 30 s: a turn may be a shift, the turn and the turn back, each ended by Carto's own 8 s
-    // limit.
-    cute.poll(Instant::from_millis(29_999));
+    // 50 s: a mapping turn may be six motions, each ended by Carto's own 8 s limit.
+    cute.poll(Instant::from_millis(49_999));
     assert!(cute.take_outgoing().is_empty());
-    cute.poll(Instant::from_millis(30_000));
+    cute.poll(Instant::from_millis(50_000));
     assert_eq!(cute.take_outgoing(), [0x00, 0x02, 0x06, 0x00]);
     assert_eq!(cute.status(), Status::Idle);
     assert!(cute.take_events().contains(&CuteEvent::MoveTimeout { waiting_for: Waiting::MoveDone }));

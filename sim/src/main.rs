@@ -74,7 +74,7 @@ fn main() -> ExitCode {
         .with_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()));
     tracing_subscriber::registry().with(stderr).with(sim::viz::logs::layer()).init();
     let result = match Cli::parse().command.unwrap_or(Command::Run(RunArgs::default_room())) {
-        Command::Run(args) if args.wants_window() && args.known_room => {
+        Command::Run(args) if args.wants_window() && args.known.known_room => {
             Err(anyhow::anyhow!("--known-room is for headless runs and sweeps, not the window"))
         }
         Command::Run(args) if args.wants_window() => {
@@ -184,7 +184,8 @@ fn finish_mcap(
 }
 
 fn run(args: RunArgs) -> Result<ExitCode> {
-    let loaded = LoadedScenario::load_or_default(args.scenario.as_deref())?.with_known_room(args.known_room);
+    let loaded =
+        LoadedScenario::load_or_default(args.scenario.as_deref())?.with_known_room(args.known.known_room);
     let out = args.out.unwrap_or_else(|| output::default_out_dir(&loaded.scenario.name));
     let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
     let (run, wall, recorder) = run_headless(loaded, args.seed, args.quiet, mcap)?;

@@ -22,9 +22,21 @@
 //! assert!(points.iter().any(|&(x, y)| ((x - 0.225).hypot(y + 0.225) - 0.05).abs() < 1e-6));
 //! ```
 
+use rapier2d::parry::math::Vector;
+use rapier2d::parry::shape::ConvexPolygon;
 use robot_model::grid::GridFrame;
 
 use crate::scenario::{Obstacle, Scenario};
+
+/// `--known-room`, for `explobot run` and `explobot sweep`.
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct KnownRoomArg {
+    /// Give Carto every surface of the room beforehand, as if its sonar saw everything: what
+    /// the rest of Carto and Cute achieve with perfect perception (an analysis, never the
+    /// robot's result).
+    #[arg(long)]
+    pub known_room: bool,
+}
 
 /// Spacing of the points along every surface, metres: under the 2 cm clearance Carto keeps.
 pub const SPACING_M: f64 = 0.01;
@@ -71,10 +83,13 @@ pub fn surface_points(s: &Scenario, frame: &GridFrame, step_m: f64) -> Vec<(f64,
                 polygon(&ring, &mut segment);
             }
             Obstacle::Segment { from, to } => segment(p(*from), p(*to)),
-            // the convex hull is what the physics uses; for a convex outline the points in order
+            // the convex hull, as the physics has it (`Obstacle::shape`)
             Obstacle::Polygon { points } => {
-                let hull: Vec<(f64, f64)> = points.iter().copied().map(p).collect();
-                polygon(&hull, &mut segment);
+                let given: Vec<Vector> = points.iter().map(|&(x, y)| Vector::new(x, y)).collect();
+                if let Some(hull) = ConvexPolygon::from_convex_hull(&given) {
+                    let corners: Vec<(f64, f64)> = hull.points().iter().map(|v| p((v.x, v.y))).collect();
+                    polygon(&corners, &mut segment);
+                }
             }
         }
     }

@@ -54,10 +54,9 @@ pub struct RunArgs {
     /// (implies --window; default address 127.0.0.1:8765).
     #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = crate::viz::DEFAULT_ADDR)]
     pub foxglove: Option<std::net::SocketAddr>,
-    /// Give Carto every surface of the room beforehand, as if its sonar saw everything: what the
-    /// rest of Carto and Cute achieve with perfect perception (an analysis, never the robot's result).
-    #[arg(long)]
-    pub known_room: bool,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub known: crate::oracle::KnownRoomArg,
     #[command(flatten)]
     #[allow(missing_docs)]
     pub shot: ScreenshotArgs,
@@ -75,7 +74,7 @@ impl RunArgs {
             mcap: None,
             mcap_lz4: false,
             foxglove: None,
-            known_room: false,
+            known: crate::oracle::KnownRoomArg::default(),
             shot: ScreenshotArgs::none(),
         }
     }
@@ -178,6 +177,7 @@ pub fn recording(run: &Lockstep) -> Result<Recording, OutputError> {
         profile_ron,
         seed: run.seed(),
         logs: run.link_logs().to_vec(),
+        known_room: loaded.known_room(),
     })
 }
 

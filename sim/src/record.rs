@@ -15,8 +15,8 @@ use sha2::{Digest, Sha256};
 /// The largest recording `load` reads (2 GiB − 1).
 pub const MAX_RECORDING_BYTES: u64 = (1 << 31) - 1;
 
-/// Recording format version; bumped when the layout changes.
-pub const FORMAT_VERSION: u32 = 1;
+/// Recording format version; bumped when the layout changes (2: `known_room`).
+pub const FORMAT_VERSION: u32 = 2;
 
 /// Which way bytes went, seen from the endpoint that recorded them (transport's tracer type).
 pub use transport::Direction as Dir;
@@ -49,6 +49,8 @@ pub struct Recording {
     pub seed: u64,
     /// Every endpoint's traffic.
     pub logs: Vec<EndpointLog>,
+    /// Carto was given the room's surfaces (`--known-room`); a replay gives them again.
+    pub known_room: bool,
 }
 
 /// A recording that could not be read or written.
@@ -302,6 +304,7 @@ mod tests {
             profile_ron: "()".into(),
             seed: 3,
             logs: log(vec![(7, Dir::Written, &[0xAA])]),
+            known_room: true,
         };
         let path = dir.join("a.rec");
         rec.save(&path).unwrap();
@@ -317,10 +320,14 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert!(matches!(Recording::load(Path::new("/dev/zero")), Err(RecordingError::Io { .. })));
-        std::fs::write(&path, b"\x01\x02garbage").unwrap();
+        let version = FORMAT_VERSION as u8;
+        std::fs::write(&path, [&[version, 2][..], b"garbage"].concat()).unwrap();
         assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
-        // Version 1, then a string claiming an enormous length: an error, not an allocation abort.
-        std::fs::write(&path, [1u8, 0xFD, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F]).unwrap();
+        // a recording of format 1 (before `known_room`) is named as such
+        std::fs::write(&path, b"\x01\x02garbage").unwrap();
+        assert!(matches!(Recording::load(&path), Err(RecordingError::Version { found: 1, .. })));
+        // The version, then a string claiming an enormous length: an error, not an allocation abort.
+        std::fs::write(&path, [version, 0xFD, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0x7F]).unwrap();
         assert!(matches!(Recording::load(&path), Err(RecordingError::Decode { .. })));
         std::fs::write(&path, [7u8, 0, 0]).unwrap();
         assert!(matches!(Recording::load(&path), Err(RecordingError::Version { found: 7, .. })));

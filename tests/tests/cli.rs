@@ -105,6 +105,11 @@ fn a_known_room_run_says_so_in_its_report_and_is_refused_in_the_window() {
     assert!(text.contains("known room      Carto was given every surface of the room"), "{text}");
     let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
     assert!(report.contains("\"known_room\": true"), "{report}");
+    // its recording replays with the room known again, byte for byte
+    let replayed = explobot().arg("replay").arg(dir.join("links.rec")).output().unwrap();
+    let text = String::from_utf8_lossy(&replayed.stdout);
+    assert_eq!(replayed.status.code(), Some(0), "{text}");
+    assert!(text.contains("identical"), "{text}");
     // a plain run's report has no such field
     let plain = explobot().args(["run", "scenarios/empty.ron", "--out"]).arg(&dir).output().unwrap();
     assert_eq!(plain.status.code(), Some(0));

@@ -105,6 +105,8 @@ impl Pilot {
             tracing::warn!(why, off_deg = off, "facing the grid heading again failed close to it: moving on");
             self.reface_failures = 0;
             motor.accept_rotation_cut();
+            // readings from now on are taken at rest, not during the stalled rotation
+            self.rest_since = now;
             return match mv {
                 Move::Forward => self.stage = Stage::Checking { since: now },
                 Move::Right | Move::Left => self.turn_safely(now, mv, motor, sensors),

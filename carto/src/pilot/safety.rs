@@ -25,14 +25,17 @@
 //!   README "Safety checks"). A shift that ends outside its tolerance is checked again from
 //!   where the robot believes it stopped: the turn runs if the circle is clear from there.
 //! - **Back to the centre.** A turn made more than [`RECENTRE_FROM_M`] from its cell's centre
-//!   (after such a shift) ends with the body driving back to the centre, holding the new
-//!   heading, before the turn's `MOVE_DONE`: Cute believes the robot stands at its cell's
-//!   centre, the next FORWARD's corridor check is made from there, and issue 10 holds the robot
-//!   within 5 cm of it at every `MOVE_DONE` (a 9 cm shift used to stay in the position error).
-//!   Mapping, the look past the turn runs first, where the turning circle was clear. The drive
-//!   back is skipped when a known echo lies in the body's rectangle plus the clearance anywhere
-//!   on the way (the body turned 90° is 1 cm longer across the old heading than before): the
-//!   robot then stays where it turned, and the next FORWARD takes the offset back.
+//!   (after such a shift, or any other offset: an along-track fix, a stall's correction, an
+//!   offset kept across a reconnect) ends with the body driving back towards the centre,
+//!   holding the new heading, before the turn's `MOVE_DONE`: Cute believes the robot stands at
+//!   its cell's centre, the next FORWARD's corridor check is made from there, and issue 10 holds
+//!   the robot within 5 cm of it at every `MOVE_DONE` (a 9 cm shift used to stay in the
+//!   position error). Mapping, the look past the turn runs first, where the turning circle was
+//!   clear. The drive stops where a known echo would come into the body's rectangle plus the
+//!   clearance (the body turned 90° is 1 cm longer across the old heading than before); the
+//!   next FORWARD takes the rest back. A STOP or a disconnect in the look or the drive, before
+//!   the `MOVE_DONE`, takes the turn back in Carto's belief (Cute never heard of it), and the
+//!   next move faces the old heading first, as after a turn cut in the middle.
 //!
 //! - **Along-track fix.** Two straight readings at rest, before and after one successful FORWARD
 //!   along the same heading, both with an echo closer than [`ALONG_FIX_MAX_M`], say how far the
@@ -387,17 +390,17 @@ impl Pilot {
         &mut self,
         now: Instant,
         turn: Move,
-        recentre: bool,
+        unacked: Option<Move>,
         motor: &mut Motor,
         sensors: &SensorState,
     ) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
         match motor.start_look(now, past, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now, recentre },
+            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot look past the turn");
-                if recentre {
-                    self.recentre(now, motor, sensors);
+                if let Some(turn) = unacked {
+                    self.recentre(now, turn, motor, sensors);
                 }
             }
         }
@@ -409,31 +412,30 @@ impl Pilot {
     /// clear, and the body then drives back to the centre before the `MOVE_DONE` ("Back to the
     /// centre" in the module docs).
     pub(super) fn turn_made(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
-        let off = motor.odometry().offset();
-        if self.pose.is_none() || off.along_m.hypot(off.left_m) <= RECENTRE_FROM_M {
+        if self.pose.is_none() || motor.odometry().offset().norm() <= RECENTRE_FROM_M {
             self.look_pending = self.look_wanted().then_some(turn);
         } else if self.look_wanted() {
-            self.look_past(now, turn, true, motor, sensors);
+            self.look_past(now, turn, Some(turn), motor, sensors);
         } else {
-            self.recentre(now, motor, sensors);
+            self.recentre(now, turn, motor, sensors);
         }
     }
 
     /// Drives the body back to its cell's centre, holding the heading, when the way there is
     /// clear of known echoes ("Back to the centre" in the module docs); otherwise the task ends
     /// where the body is.
-    pub(super) fn recentre(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn recentre(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
         let off = motor.odometry().offset();
         let Some(robot) = self.believed(motor, sensors) else {
             return;
         };
-        if off.along_m.hypot(off.left_m) <= RECENTRE_FROM_M {
+        if off.norm() <= RECENTRE_FROM_M {
             return;
         }
         let s = self.safety;
         let (hl, hw) = (s.half_length_m + s.clearance_m, s.half_width_m + s.clearance_m);
         // from where the body is towards the centre, as far as the way is clear
-        let steps = (off.along_m.hypot(off.left_m) / SHIFT_STEP_M).ceil() as i32;
+        let steps = (off.norm() / SHIFT_STEP_M).ceil() as i32;
         let clear_to = (1..=steps)
             .map(|k| f64::from(k) / f64::from(steps))
             .take_while(|&t| {
@@ -460,7 +462,7 @@ impl Pilot {
         match motor.start_shift(now, along, left, sensors) {
             Ok(()) => {
                 self.counters.turns_recentred += 1;
-                self.stage = Stage::Recentring;
+                self.stage = Stage::Recentring { turn };
             }
             Err(e) => tracing::warn!(error = %e, "cannot drive back to the cell's centre after a turn"),
         }
@@ -472,12 +474,12 @@ impl Pilot {
         &mut self,
         now: Instant,
         since: Instant,
-        recentre: bool,
+        unacked: Option<Move>,
         motor: &mut Motor,
         sensors: &SensorState,
     ) {
         match motor.start_look(now, 0.0, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: true, since, recentre },
+            Ok(()) => self.stage = Stage::LookingPast { back: true, since, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
                 motor.mark_rotation_cut();

@@ -105,11 +105,13 @@ pub struct CuteConfig {
     /// Which Carto is on the other end.
     pub compat: Compat,
     /// How long one move may take before [`super::CuteEvent::MoveTimeout`] (per command in a
-    /// batch). The default, 30 s, is above the longest move our Carto can make: a turn may be
-    /// three motions (a shift clear of an echo, the turn, and the turn back when it fails), each
-    /// ended by Carto's own 8 s limit (`CartoConfig::move_timeout`). With 5 s, a shift and a turn whose
-    /// settle nudges repeat over a slow, lossy motor link ran out while Carto was still within
-    /// its limits, and Cute stopped a mapping that would have finished.
+    /// batch). The default, 50 s, is above the longest move our Carto can make: a mapping turn
+    /// may be six motions before its MOVE_DONE (facing the grid heading again after a cut
+    /// rotation, a shift clear of an echo, the turn, and either the turn back when it fails or,
+    /// made off the centre, the look past it, the look back and the drive back to the centre),
+    /// each ended by Carto's own 8 s limit (`CartoConfig::move_timeout`). With 5 s, a shift and a
+    /// turn whose settle nudges repeat over a slow, lossy motor link ran out while Carto was
+    /// still within its limits, and Cute stopped a mapping that would have finished.
     pub move_timeout: Duration,
     /// How long ROBOT_POSITION_RECEIVED may take before the position is sent again (5 s).
     pub ack_timeout: Duration,
@@ -144,7 +146,7 @@ impl Default for CuteConfig {
             start: (0, 0),
             heading: Heading::East,
             compat: Compat::Default,
-            move_timeout: Duration::from_secs(30),
+            move_timeout: Duration::from_secs(50),
             ack_timeout: Duration::from_secs(5),
             max_frame: link::DEFAULT_MAX_FRAME,
             map: None,

@@ -130,10 +130,9 @@ pub struct RunArgs {
     /// recorder; see `explobot run --mcap`).
     #[arg(long)]
     pub mcap: bool,
-    /// Give Carto every surface of the room beforehand, as if its sonar saw everything: what the
-    /// rest of Carto and Cute achieve with perfect perception (an analysis, never the robot's result).
-    #[arg(long)]
-    pub known_room: bool,
+    #[command(flatten)]
+    #[allow(missing_docs)]
+    pub known: crate::oracle::KnownRoomArg,
 }
 
 impl SweepArgs {
@@ -160,7 +159,7 @@ impl RunArgs {
         {
             return Err(SweepError::Input(format!("--timeout {t}: give a number of seconds > 0")));
         }
-        let plan = Plan::build(&self.scenarios, &self.generate, self.seeds.as_ref(), self.known_room)?;
+        let plan = Plan::build(&self.scenarios, &self.generate, self.seeds.as_ref(), self.known.known_room)?;
         let mine: Vec<Run> = plan.runs.iter().filter(|r| shard.contains(r.index)).copied().collect();
         let jobs =
             self.jobs.or_else(|| std::thread::available_parallelism().ok()).map_or(1, NonZeroUsize::get);
