@@ -107,10 +107,7 @@ impl Pilot {
             motor.accept_rotation_cut();
             // readings from now on are taken at rest, not during the stalled rotation
             self.rest_since = now;
-            return match mv {
-                Move::Forward => self.stage = Stage::Checking { since: now },
-                Move::Right | Move::Left => self.turn_safely(now, mv, motor, sensors),
-            };
+            return self.begin_move(now, mv, motor, sensors);
         }
         self.reface_failures += 1;
         if self.reface_failures >= REFACE_TRIES {
