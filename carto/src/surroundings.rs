@@ -210,7 +210,7 @@ impl Surroundings {
             self.all().copied().filter(|&(x, y)| (x - robot.x).hypot(y - robot.y) < reach).collect();
         let clears = |(along, left): (f64, f64)| {
             let (x, y) = robot.offset(along, left);
-            !near.iter().any(|&(px, py)| (px - x).hypot(py - y) < radius_m)
+            nearest_inside(near.iter(), Pose2 { x, y, ..robot }, radius_m).is_none()
         };
         let steps = (max_m / step_m).floor() as i32;
         let along = (2..=steps).flat_map(|k| [-k, k]).map(|k| (f64::from(k) * step_m, 0.0));
@@ -231,11 +231,20 @@ impl Surroundings {
 
     /// The nearest point, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
     pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
-        self.all()
-            .map(|&p| robot.local(p))
-            .filter(|&(along, left)| along.hypot(left) < radius_m)
-            .min_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)))
+        nearest_inside(self.all(), robot, radius_m)
     }
+}
+
+/// The nearest of `points`, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
+fn nearest_inside<'a>(
+    points: impl Iterator<Item = &'a (f64, f64)>,
+    robot: Pose2,
+    radius_m: f64,
+) -> Option<(f64, f64)> {
+    points
+        .map(|&p| robot.local(p))
+        .filter(|&(along, left)| along.hypot(left) < radius_m)
+        .min_by(|a, b| a.0.hypot(a.1).total_cmp(&b.0.hypot(b.1)))
 }
 
 #[cfg(test)]

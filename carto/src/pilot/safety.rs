@@ -444,8 +444,7 @@ impl Pilot {
             })
             .last()
             .unwrap_or(0.0);
-        let (along, left) = (-off.along_m * clear_to, -off.left_m * clear_to);
-        if along.hypot(left) < 2.0 * SHIFT_STEP_M {
+        if clear_to * off.norm() < 2.0 * SHIFT_STEP_M {
             tracing::info!(
                 along = off.along_m,
                 left = off.left_m,
@@ -459,7 +458,7 @@ impl Pilot {
             part = clear_to,
             "turned off the centre: driving back towards it"
         );
-        match motor.start_shift(now, along, left, sensors) {
+        match motor.start_shift(now, -off.along_m * clear_to, -off.left_m * clear_to, sensors) {
             Ok(()) => {
                 self.counters.turns_recentred += 1;
                 self.stage = Stage::Recentring { turn };
