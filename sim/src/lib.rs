@@ -4,6 +4,7 @@ pub mod app;
 pub mod bench;
 pub mod body;
 pub mod drive;
+pub mod freespace;
 pub mod generate;
 pub mod grid;
 pub mod localisation;

@@ -84,9 +84,9 @@ fn main() -> ExitCode {
         Command::Window(args) => window(args.scenario, args.seed, &args.shot, args.foxglove, None),
         Command::Run(args) => run(args),
         Command::Sim(args) => sim_serve(&args),
-        Command::Decode(args) => args.decode().map_err(anyhow::Error::from).map(|text| {
-            print!("{text}");
-            ExitCode::SUCCESS
+        Command::Decode(args) => args.decode().map_err(anyhow::Error::from).and_then(|text| {
+            output::print_stdout(&text)?;
+            Ok(ExitCode::SUCCESS)
         }),
         Command::Encode(args) => args.encode().map_err(anyhow::Error::from).map(|bytes| {
             println!("{}", wiretool::to_hex(&bytes));
@@ -190,9 +190,9 @@ fn run(args: RunArgs) -> Result<ExitCode> {
     let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
     let (run, wall, recorder) = run_headless(loaded, args.seed, args.quiet, mcap)?;
     let report = run.report(wall);
-    print!("{}", report.to_text());
+    output::print_stdout(&report.to_text())?;
     output::write_outputs(&out, &run, &report)?;
-    println!("wrote {}/report.json, map.png, links.rec", out.display());
+    output::print_stdout(&format!("wrote {}/report.json, map.png, links.rec\n", out.display()))?;
     finish_mcap(recorder, &run, &report, mcap)?;
     Ok(if report.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

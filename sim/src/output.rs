@@ -27,6 +27,17 @@ use crate::record::{FORMAT_VERSION, Recording, RecordingError};
 use crate::report::Report;
 use crate::runner::Lockstep;
 
+/// Writes `text` to standard output. A reader that closed the pipe early (`explobot truth | head`)
+/// has all it asked for: that is not an error, and nothing panics.
+pub fn print_stdout(text: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        other => other,
+    }
+}
+
 /// `explobot run`'s arguments.
 #[derive(clap::Args, Clone, Debug)]
 pub struct RunArgs {

@@ -81,15 +81,18 @@ pub struct RobotTruth {
 }
 
 /// The room's walls and obstacles as parry shapes, with bounding boxes for a quick reject.
-struct Solids<'a> {
+pub(crate) struct Solids<'a> {
+    /// How far apart counts as not touching: [`TOUCH`] plus the clearance asked for.
+    gap: f32,
     room: Vec<Vector>,
     walls: Vec<(Segment, Aabb)>,
     obstacles: Vec<(&'a Pose, &'a dyn Shape, Aabb)>,
 }
 
 impl<'a> Solids<'a> {
-    fn new(room: &[(f32, f32)], obstacles: &'a [PlacedShape]) -> Solids<'a> {
+    pub(crate) fn new(room: &[(f32, f32)], obstacles: &'a [PlacedShape], clearance: f32) -> Solids<'a> {
         Solids {
+            gap: TOUCH + clearance.max(0.0),
             room: room_points(room),
             walls: room_edges(room).map(|w| (w, w.compute_aabb(&Pose::IDENTITY))).collect(),
             obstacles: obstacles.iter().map(|(p, s)| (p, s.as_ref(), s.compute_aabb(p))).collect(),
@@ -99,14 +102,15 @@ impl<'a> Solids<'a> {
     /// Whether `shape` at `pose` lies in the room and touches nothing: it stays more than
     /// [`TOUCH`] away from every wall and obstacle, the gap at which the run's collision counter
     /// starts counting a contact (so a turn the truth allows is never a counted collision when
-    /// made exactly at the centre). A pair parry cannot measure counts as touching (the safe side).
-    fn clear(&self, pose: &Pose, shape: &dyn Shape) -> bool {
+    /// made exactly at the centre), plus the clearance asked for (0 for the truth itself). A pair
+    /// parry cannot measure counts as touching (the safe side).
+    pub(crate) fn clear(&self, pose: &Pose, shape: &dyn Shape) -> bool {
         if !point_in_poly2d(pose.translation, &self.room) {
             return false;
         }
-        let aabb = shape.compute_aabb(pose).loosened(TOUCH);
+        let aabb = shape.compute_aabb(pose).loosened(self.gap);
         let apart = |p: &Pose, s: &dyn Shape, b: &Aabb| {
-            !aabb.intersects(b) || query::distance(pose, shape, p, s).is_ok_and(|d| d.distance > TOUCH)
+            !aabb.intersects(b) || query::distance(pose, shape, p, s).is_ok_and(|d| d.distance > self.gap)
         };
         self.walls.iter().all(|(w, b)| apart(&Pose::IDENTITY, w, b))
             && self.obstacles.iter().all(|(p, s, b)| apart(p, *s, b))
@@ -122,7 +126,7 @@ impl RobotTruth {
         obstacles: &[PlacedShape],
         profile: &RobotProfile,
     ) -> RobotTruth {
-        let solids = Solids::new(room, obstacles);
+        let solids = Solids::new(room, obstacles, 0.0);
         let (length, width) = (profile.geometry.body_length_m, profile.geometry.body_width_m);
         let (half_l, half_w) = (length * 0.5, width * 0.5);
         let along_rows = Cuboid::new(Vector::new(half_l, half_w));
@@ -213,15 +217,14 @@ impl RobotTruth {
     ) -> Visits {
         let (rows, cols) = (self.rows, self.cols);
         let cells = rows * cols;
-        let mut visitable = vec![false; cells];
-        let mut round_trip = vec![false; cells];
         let Some(start_cell) = self.index(start.0, start.1).filter(|_| self.is_free(start.0, start.1)) else {
-            return Visits { visitable, round_trip, tour_bound: 0 };
+            return Visits { visitable: vec![false; cells], round_trip: vec![false; cells], tour_bound: 0 };
         };
         // Heading::ALL lists the headings in wire order, so `as_u8` is the index.
         let state = |cell: usize, h: Heading| cell * 4 + usize::from(h.as_u8());
-        // The states one step after (cell, h).
-        let next = |cell: usize, h: Heading| {
+        // The states one step after `st`.
+        let next = |st: usize| {
+            let (cell, h) = (st / 4, Heading::ALL[st % 4]);
             let (row, col) = (cell / cols, cell % cols);
             let mut out = Vec::with_capacity(3);
             if can_turn(row, col) {
@@ -239,68 +242,7 @@ impl RobotTruth {
             }
             out
         };
-        let decode = |st: usize| (st / 4, Heading::ALL[st % 4]);
-        // Forward: every state reachable from the start state.
-        let mut seen = vec![false; cells * 4];
-        let mut stack = vec![state(start_cell, heading)];
-        seen[stack[0]] = true;
-        let mut edges_back: Vec<Vec<usize>> = vec![Vec::new(); cells * 4];
-        while let Some(st) = stack.pop() {
-            let (cell, h) = decode(st);
-            for n in next(cell, h) {
-                edges_back[n].push(st);
-                if !seen[n] {
-                    seen[n] = true;
-                    stack.push(n);
-                }
-            }
-        }
-        // Backward from the start state, over the edges met: the states that can return.
-        let mut back = vec![false; cells * 4];
-        let mut stack = vec![state(start_cell, heading)];
-        back[stack[0]] = true;
-        while let Some(st) = stack.pop() {
-            for &p in &edges_back[st] {
-                if !back[p] {
-                    back[p] = true;
-                    stack.push(p);
-                }
-            }
-        }
-        for st in 0..cells * 4 {
-            visitable[st / 4] |= seen[st];
-            round_trip[st / 4] |= seen[st] && back[st];
-        }
-        // A tour leaves the round trips at most once, into one branch: bound what it adds by
-        // the cells visitable from each state just outside them.
-        let mut branch_max = 0;
-        let mut mark = vec![false; cells * 4];
-        let mut searched = vec![false; cells * 4];
-        for st in (0..cells * 4).filter(|&st| seen[st] && back[st]) {
-            let (cell, h) = decode(st);
-            for first in next(cell, h).into_iter().filter(|&n| !back[n]) {
-                if std::mem::replace(&mut searched[first], true) {
-                    continue; // another exit leads into the same state
-                }
-                mark.fill(false);
-                let mut new_cells = vec![false; cells];
-                let mut stack = vec![first];
-                mark[first] = true;
-                while let Some(b) = stack.pop() {
-                    new_cells[b / 4] = !round_trip[b / 4];
-                    let (c, bh) = decode(b);
-                    for n in next(c, bh) {
-                        if !mark[n] {
-                            mark[n] = true;
-                            stack.push(n);
-                        }
-                    }
-                }
-                branch_max = branch_max.max(new_cells.iter().filter(|&&x| x).count());
-            }
-        }
-        let tour_bound = round_trip.iter().filter(|&&x| x).count() + branch_max;
-        Visits { visitable, round_trip, tour_bound }
+        tour_over_states(cells * 4, state(start_cell, heading), next, |st| st / 4, cells, None)
     }
 
     /// For every cell, whether moves connect it to `start`; row-major.
@@ -313,6 +255,84 @@ impl RobotTruth {
             |a, b| self.can_move(a, b),
         )
     }
+}
+
+/// [`Visits`] over any directed graph of `states` (each in the cell `cell_of` gives, of `cells`),
+/// from `start`, with the states one step later from `next`; the tour bound counts only the cells
+/// `counted` marks (all when `None`).
+pub(crate) fn tour_over_states(
+    states: usize,
+    start: usize,
+    next: impl Fn(usize) -> Vec<usize>,
+    cell_of: impl Fn(usize) -> usize,
+    cells: usize,
+    counted: Option<&[bool]>,
+) -> Visits {
+    let counts = |cell: usize| counted.is_none_or(|c| c.get(cell).copied().unwrap_or(false));
+    let mut visitable = vec![false; cells];
+    let mut round_trip = vec![false; cells];
+    if start >= states {
+        return Visits { visitable, round_trip, tour_bound: 0 };
+    }
+    // Forward: every state reachable from the start state.
+    let mut seen = vec![false; states];
+    let mut edges_back: Vec<Vec<usize>> = vec![Vec::new(); states];
+    let mut stack = vec![start];
+    seen[start] = true;
+    while let Some(st) = stack.pop() {
+        for n in next(st) {
+            edges_back[n].push(st);
+            if !seen[n] {
+                seen[n] = true;
+                stack.push(n);
+            }
+        }
+    }
+    // Backward from the start state, over the edges met: the states that can return.
+    let mut back = vec![false; states];
+    let mut stack = vec![start];
+    back[start] = true;
+    while let Some(st) = stack.pop() {
+        for &p in &edges_back[st] {
+            if !back[p] {
+                back[p] = true;
+                stack.push(p);
+            }
+        }
+    }
+    for st in 0..states {
+        visitable[cell_of(st)] |= seen[st];
+        round_trip[cell_of(st)] |= seen[st] && back[st];
+    }
+    // A tour leaves the round trips at most once, into one branch: bound what it adds by the
+    // cells visitable from each state just outside them.
+    let mut branch_max = 0;
+    let mut mark = vec![false; states];
+    let mut searched = vec![false; states];
+    for st in (0..states).filter(|&st| seen[st] && back[st]) {
+        for first in next(st).into_iter().filter(|&n| !back[n]) {
+            if std::mem::replace(&mut searched[first], true) {
+                continue; // another exit leads into the same state
+            }
+            mark.fill(false);
+            let mut new_cells = vec![false; cells];
+            let mut stack = vec![first];
+            mark[first] = true;
+            while let Some(b) = stack.pop() {
+                let cell = cell_of(b);
+                new_cells[cell] = !round_trip[cell] && counts(cell);
+                for n in next(b) {
+                    if !mark[n] {
+                        mark[n] = true;
+                        stack.push(n);
+                    }
+                }
+            }
+            branch_max = branch_max.max(new_cells.iter().filter(|&&x| x).count());
+        }
+    }
+    let tour_bound = (0..cells).filter(|&c| round_trip[c] && counts(c)).count() + branch_max;
+    Visits { visitable, round_trip, tour_bound }
 }
 
 /// The cells a FORWARD-and-turn robot can visit without a touch ([`RobotTruth::visits_from`]),
@@ -349,7 +369,7 @@ pub fn turnable_after_slide(
 ) -> Vec<bool> {
     const STEP_M: f32 = 0.015;
     const SLIDE_STEP_M: f32 = 0.01;
-    let solids = Solids::new(room, obstacles);
+    let solids = Solids::new(room, obstacles, 0.0);
     let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
     let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
     let circle = Ball::new(half_l.hypot(half_w));

@@ -21,6 +21,7 @@ use std::path::PathBuf;
 use image::RgbImage;
 use serde::Serialize;
 
+use crate::freespace::FreeSpace;
 use crate::mapimg::{PALETTE, room_canvas};
 use crate::picture::{LegendEntry, Swatch, blend, fill, line, with_legend};
 use crate::scenario::{LoadedScenario, ScenarioError};
@@ -119,6 +120,34 @@ impl TruthCounts {
     }
 }
 
+/// At most how many cells one touch-free tour can visit in the lattice model of
+/// [`crate::freespace`] — the body anywhere in its cells between commands, any path within a
+/// FORWARD's two cells, turns wherever the circle is clear — keeping `clearance_m` from
+/// everything, for each distance from the centre that commands may end within in `stops_m`.
+/// Counts the cells the truth connects to the start, as coverage does.
+pub fn lattice_tour_bounds(loaded: &LoadedScenario, clearance_m: f32, stops_m: &[f32]) -> Vec<usize> {
+    let s = &loaded.scenario;
+    let t = loaded.truth();
+    let start = (usize::from(s.start.row), usize::from(s.start.col));
+    let reachable = t.reachable_from(start);
+    let space = FreeSpace::build(t.frame, &s.room, &s.obstacle_shapes(), &loaded.profile, clearance_m);
+    stops_m
+        .iter()
+        .map(|&stop| space.visits((start, s.start.heading), stop, Some(&reachable)).tour_bound)
+        .collect()
+}
+
+/// One line of `explobot truth --clearance`: [`lattice_tour_bounds`] for one clearance and stop.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClearanceBound {
+    /// Metres kept from everything.
+    pub clearance_m: f32,
+    /// How far off a cell's centre commands may end.
+    pub stop_within_m: f32,
+    /// At most this many reachable cells in one touch-free tour.
+    pub tour_bound: usize,
+}
+
 /// Draws `truth.png` for `loaded` (see the module docs).
 pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
     let t = loaded.truth();
@@ -188,6 +217,25 @@ pub struct TruthArgs {
     /// Where to write the picture (default: runs/NAME/truth.png).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Also bound one touch-free tour for a body that keeps this many metres from everything,
+    /// anywhere in its cells (`sim/README.md`, "Clearance"); repeat for several, e.g.
+    /// `--clearance 0.01 --clearance 0.02`.
+    #[arg(long, value_name = "METRES", value_parser = parse_metres)]
+    pub clearance: Vec<f32>,
+    /// With `--clearance`: how far from a cell's centre a command may leave the body, metres
+    /// (repeat for several; default 0 and 0.02).
+    #[arg(long, value_name = "METRES", value_parser = parse_metres, requires = "clearance")]
+    pub stop_within: Vec<f32>,
+}
+
+/// A distance in metres: finite, 0 to 0.2.
+fn parse_metres(text: &str) -> Result<f32, String> {
+    let m: f32 = text.parse().map_err(|_| format!("`{text}` is not a number of metres"))?;
+    if m.is_finite() && (0.0..=0.2).contains(&m) {
+        Ok(m)
+    } else {
+        Err(format!("expected 0 to 0.2 m, not {text}"))
+    }
 }
 
 /// Why `explobot truth` failed.
@@ -211,28 +259,20 @@ impl TruthArgs {
     pub fn run(&self) -> Result<(), TruthError> {
         let loaded = LoadedScenario::load_or_default(self.scenario.as_deref())?;
         let c = TruthCounts::of(&loaded);
-        println!("{}: {} × {} cells of {:.2} m", loaded.label, c.rows, c.cols, loaded.truth().frame.cell);
-        println!("  free (the robot fits)        {}", c.free);
-        println!("  reachable from the start     {}  (what coverage counts)", c.reachable);
-        println!("  reachable, turn on the spot  {}", c.reachable_turnable);
-        println!("  free but not reachable       {}", c.free - c.reachable);
-        println!("  moves blocked between free   {}", c.blocked_moves);
-        let pct = |n: usize| 100.0 * n as f64 / c.reachable.max(1) as f64;
-        println!(
-            "  visitable without a touch    {}  (FORWARD and turns, sliding in a cell to turn)",
-            c.visitable
-        );
-        println!("  … and back again             {}", c.round_trip);
-        println!(
-            "  one touch-free tour, at most {}  ({:.1}% of reachable: the best coverage with 0 collisions)",
-            c.tour_bound,
-            pct(c.tour_bound)
-        );
-        println!(
-            "  … turning at centres only    {}  ({:.1}%)",
-            c.tour_bound_at_centres,
-            pct(c.tour_bound_at_centres)
-        );
+        let stops = if self.stop_within.is_empty() { vec![0.0, 0.02] } else { self.stop_within.clone() };
+        let bounds: Vec<ClearanceBound> = self
+            .clearance
+            .iter()
+            .flat_map(|&clearance_m| {
+                let tours = lattice_tour_bounds(&loaded, clearance_m, &stops);
+                stops.iter().zip(tours).map(move |(&stop_within_m, tour_bound)| ClearanceBound {
+                    clearance_m,
+                    stop_within_m,
+                    tour_bound,
+                })
+            })
+            .collect();
+        let mut text = c.text(&loaded.label, loaded.truth().frame.cell, &bounds);
         let path = self
             .out
             .clone()
@@ -242,8 +282,50 @@ impl TruthArgs {
             std::fs::create_dir_all(dir).map_err(|e| write(e.to_string()))?;
         }
         truth_picture(&loaded).save(&path).map_err(|e| write(e.to_string()))?;
-        println!("wrote {}", path.display());
-        Ok(())
+        text.push_str(&format!("wrote {}\n", path.display()));
+        crate::output::print_stdout(&text)
+            .map_err(|e| TruthError::Write { path: "<stdout>".into(), message: e.to_string() })
+    }
+}
+
+impl TruthCounts {
+    /// What `explobot truth` prints for a room `label` on cells of `cell` metres, with the
+    /// lattice tour bounds asked for.
+    pub fn text(&self, label: &str, cell: f32, bounds: &[ClearanceBound]) -> String {
+        let pct = |n: usize| 100.0 * n as f64 / self.reachable.max(1) as f64;
+        let mut lines = vec![
+            format!("{label}: {} × {} cells of {cell:.2} m", self.rows, self.cols),
+            format!("  free (the robot fits)        {}", self.free),
+            format!("  reachable from the start     {}  (what coverage counts)", self.reachable),
+            format!("  reachable, turn on the spot  {}", self.reachable_turnable),
+            format!("  free but not reachable       {}", self.free - self.reachable),
+            format!("  moves blocked between free   {}", self.blocked_moves),
+            format!(
+                "  visitable without a touch    {}  (FORWARD and turns, sliding in a cell to turn)",
+                self.visitable
+            ),
+            format!("  … and back again             {}", self.round_trip),
+            format!(
+                "  one touch-free tour, at most {}  ({:.1}% of reachable: the best coverage with 0 collisions)",
+                self.tour_bound,
+                pct(self.tour_bound)
+            ),
+            format!(
+                "  … turning at centres only    {}  ({:.1}%)",
+                self.tour_bound_at_centres,
+                pct(self.tour_bound_at_centres)
+            ),
+        ];
+        for b in bounds {
+            lines.push(format!(
+                "  keeping {:.1} cm clear, stopping ≤ {:.1} cm off centres: one tour at most {}  ({:.1}%)",
+                b.clearance_m * 100.0,
+                b.stop_within_m * 100.0,
+                b.tour_bound,
+                pct(b.tour_bound)
+            ));
+        }
+        lines.iter().map(|l| format!("{l}\n")).collect()
     }
 }
 

@@ -119,3 +119,26 @@ fn a_known_room_run_says_so_in_its_report_and_is_refused_in_the_window() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--known-room is for headless runs and sweeps"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn truth_bounds_a_tour_for_each_clearance_and_stop_asked_for() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-truth-{}", std::process::id()));
+    let png = dir.join("truth.png");
+    let out = explobot()
+        .args(["truth", "sim/docs/truth-cases.ron", "--clearance", "0.02", "--stop-within", "0.03", "--out"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("keeping 2.0 cm clear, stopping ≤ 3.0 cm off centres: one tour at most"), "{text}");
+    assert!(!text.contains("stopping ≤ 0.0 cm"), "only the stops asked for: {text}");
+    assert!(png.exists());
+    let out =
+        explobot().args(["truth", "sim/docs/truth-cases.ron", "--stop-within", "0.02"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "--stop-within needs --clearance");
+    let out =
+        explobot().args(["truth", "sim/docs/truth-cases.ron", "--clearance", "-0.01"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "a negative clearance is refused");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -64,7 +64,6 @@
 //! ```
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use rand::{Rng, SeedableRng};
@@ -173,7 +172,7 @@ impl GenerateArgs {
             .map_err(|e| GenerateError::Invalid(e.to_string()))?;
         let written = match &self.out {
             Some(path) => std::fs::write(path, &text),
-            None => std::io::stdout().lock().write_all(text.as_bytes()),
+            None => crate::output::print_stdout(&text),
         };
         written.map_err(|e| GenerateError::Write { path: label, message: e.to_string() })
     }

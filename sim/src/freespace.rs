@@ -1,0 +1,383 @@
+//! The most any controller could visit while keeping a clearance: a bound over every position
+//! of the body on a 1 cm lattice, not only the cell centres.
+//!
+//! [`RobotTruth::visits_with`](crate::truth::RobotTruth::visits_with) moves the body from centre
+//! to centre. A Carto may do more with the same link commands: stop anywhere in a cell, slide
+//! (mecanum wheels move any way without turning), drive a FORWARD on any path through the two
+//! cells, and turn wherever its turning circle is clear. This bound allows all of that at once:
+//!
+//! - The body stands at lattice points (every centimetre, rounded so a cell holds an odd number,
+//!   one on its centre)
+//!   facing along the rows (east, west) or along the columns (north, south), where it keeps the
+//!   clearance asked for from every wall and obstacle. It is *in* the cell whose square holds
+//!   its centre.
+//! - It slides between neighbouring lattice points where both are clear. Points 1 cm apart both
+//!   clear leave the body between them within half a centimetre of clear: the bound is that
+//!   much lenient.
+//! - A turn of 90° happens at a point whose turning circle (half the body's diagonal, grown by
+//!   the clearance) is clear, and changes Cute's heading by a quarter.
+//! - A FORWARD from cell A to the next cell B along the heading goes on any sliding path inside
+//!   A and B, facing the same way. A turn may slide within the cell to a point where it can
+//!   turn, and slide back.
+//! - Every command ends with the body within a given distance of the cell's centre
+//!   ([`LatticeLeeway::stop_within_m`]): the report measures the position error from the centre
+//!   at every `MOVE_DONE`, so a robot that stops 4 cm off the centre spends 4 of the 5 cm the
+//!   issue allows.
+//!
+//! The states are (cell, heading, piece of the cell the body can slide within), and the tour
+//! bound is the one of [`Visits`] (round trips plus the largest one-way branch; the link has no
+//! reverse). What it leaves out: a body standing at other angles than the four headings, and a
+//! FORWARD that passes through a third cell.
+
+use rapier2d::parry::math::{Pose, Vector};
+use rapier2d::parry::shape::{Ball, Cuboid};
+use robot_model::grid::{GridFrame, Heading};
+use robot_model::profile::RobotProfile;
+
+use crate::grid::PlacedShape;
+use crate::truth::{Solids, Visits, tour_over_states};
+
+/// Lattice spacing asked for; each cell holds the nearest odd number of points, one of them on
+/// its centre.
+pub const STEP_M: f32 = 0.01;
+
+/// Which way the body's length lies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Lie {
+    AlongRows = 0,
+    AlongCols = 1,
+}
+
+fn lie(h: Heading) -> Lie {
+    match h {
+        Heading::East | Heading::West => Lie::AlongRows,
+        Heading::North | Heading::South => Lie::AlongCols,
+    }
+}
+
+/// The lattice over the whole grid: `n` × `n` points per cell.
+struct Lattice {
+    frame: GridFrame,
+    n: usize,
+    width: usize,
+    height: usize,
+    /// Per lie, per point: the body keeps the clearance.
+    clear: [Vec<bool>; 2],
+    /// Per point: the turning circle keeps the clearance.
+    turn: Vec<bool>,
+}
+
+impl Lattice {
+    fn build(frame: GridFrame, solids: &Solids, profile: &RobotProfile) -> Lattice {
+        // an odd number, so that one point lies on the cell's centre
+        let n = ((frame.cell / STEP_M).round() as usize).max(1) | 1;
+        let step = frame.cell / n as f32;
+        let (width, height) = (frame.cols * n, frame.rows * n);
+        let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
+        let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
+        let circle = Ball::new(half_l.hypot(half_w));
+        let mut clear = [vec![false; width * height], vec![false; width * height]];
+        let mut turn = vec![false; width * height];
+        for gy in 0..height {
+            let y = frame.top - (gy as f32 + 0.5) * step;
+            for gx in 0..width {
+                let pose = Pose::from_translation(Vector::new(frame.left + (gx as f32 + 0.5) * step, y));
+                let i = gy * width + gx;
+                for (k, body) in bodies.iter().enumerate() {
+                    clear[k][i] = solids.clear(&pose, body);
+                }
+                // The circle holds both bodies, so it is clear only where both are.
+                turn[i] = clear[0][i] && clear[1][i] && solids.clear(&pose, &circle);
+            }
+        }
+        Lattice { frame, n, width, height, clear, turn }
+    }
+
+    /// How far point `i` lies from its cell's centre, metres.
+    fn distance_to_centre(&self, i: usize) -> f32 {
+        let centre = self.n as f32 * 0.5 - 0.5;
+        let (lx, ly) = ((i % self.width % self.n) as f32, (i / self.width % self.n) as f32);
+        (lx - centre).hypot(ly - centre) * self.frame.cell / self.n as f32
+    }
+
+    fn cell_of(&self, gx: usize, gy: usize) -> usize {
+        (gy / self.n) * self.frame.cols + gx / self.n
+    }
+
+    /// The lattice points of `cell`.
+    fn points(&self, cell: usize) -> impl Iterator<Item = usize> + '_ {
+        let (row, col) = (cell / self.frame.cols, cell % self.frame.cols);
+        (row * self.n..(row + 1) * self.n)
+            .flat_map(move |gy| (col * self.n..(col + 1) * self.n).map(move |gx| gy * self.width + gx))
+    }
+
+    /// Labels the clear points of `lie` by the piece they slide within, over the points `in_area`
+    /// allows: `label[i]` is a representative point of i's piece, or `usize::MAX` off it.
+    fn pieces(&self, lie: Lie, area: &[usize], in_area: impl Fn(usize) -> bool, label: &mut [usize]) {
+        let clear = &self.clear[lie as usize];
+        for &i in area {
+            label[i] = usize::MAX;
+        }
+        for &seed in area {
+            if !clear[seed] || label[seed] != usize::MAX {
+                continue;
+            }
+            label[seed] = seed;
+            let mut stack = vec![seed];
+            while let Some(i) = stack.pop() {
+                let (gx, gy) = (i % self.width, i / self.width);
+                let neighbours = [
+                    (gx > 0).then(|| i - 1),
+                    (gx + 1 < self.width).then(|| i + 1),
+                    (gy > 0).then(|| i - self.width),
+                    (gy + 1 < self.height).then(|| i + self.width),
+                ];
+                for j in neighbours.into_iter().flatten() {
+                    if clear[j] && in_area(j) && label[j] == usize::MAX {
+                        label[j] = seed;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One piece of a cell: lattice points the body, lying one way (which [`FreeSpace::piece_at`]
+/// says), can slide between without leaving the cell.
+#[derive(Debug, Clone, Copy)]
+struct Piece {
+    cell: usize,
+    /// How close to the cell's centre the body can stand in it, metres.
+    from_centre_m: f32,
+}
+
+/// The free positions of the body in a room, on the lattice, for one clearance, and every
+/// command the lattice model allows between them.
+pub struct FreeSpace {
+    frame: GridFrame,
+    pieces: Vec<Piece>,
+    /// Per piece and heading (index `Heading::as_u8`), the pieces a command leads to and the
+    /// heading after it.
+    moves: Vec<[Vec<(usize, Heading)>; 4]>,
+    /// Per lie, per lattice point: its piece (`usize::MAX` where the body is not clear).
+    piece_at: [Vec<usize>; 2],
+    lattice: Lattice,
+}
+
+impl FreeSpace {
+    /// The lattice over `frame` for the robot of `profile`, keeping `clearance_m` metres beyond the
+    /// 1 mm of a touch from every wall of `room` and every obstacle.
+    pub fn build(
+        frame: GridFrame,
+        room: &[(f32, f32)],
+        obstacles: &[PlacedShape],
+        profile: &RobotProfile,
+        clearance_m: f32,
+    ) -> FreeSpace {
+        let solids = Solids::new(room, obstacles, clearance_m);
+        let lattice = Lattice::build(frame, &solids, profile);
+        let cells = frame.rows * frame.cols;
+        let total = lattice.width * lattice.height;
+        let owner = |j: usize| lattice.cell_of(j % lattice.width, j / lattice.width);
+        // Pieces: label each cell's clear points, per lie, then number the labels.
+        let mut piece_at = [vec![usize::MAX; total], vec![usize::MAX; total]];
+        let mut pieces = Vec::new();
+        let mut label = vec![usize::MAX; total];
+        for lie in [Lie::AlongRows, Lie::AlongCols] {
+            for cell in 0..cells {
+                let area: Vec<usize> = lattice.points(cell).collect();
+                lattice.pieces(lie, &area, |j| owner(j) == cell, &mut label);
+                let mut id_of_label = std::collections::BTreeMap::new();
+                for &i in &area {
+                    if label[i] == usize::MAX {
+                        continue;
+                    }
+                    let id = *id_of_label.entry(label[i]).or_insert_with(|| {
+                        pieces.push(Piece { cell, from_centre_m: f32::INFINITY });
+                        pieces.len() - 1
+                    });
+                    piece_at[lie as usize][i] = id;
+                    let d = lattice.distance_to_centre(i);
+                    if d < pieces[id].from_centre_m {
+                        pieces[id].from_centre_m = d;
+                    }
+                }
+            }
+        }
+        let mut moves: Vec<[Vec<(usize, Heading)>; 4]> = vec![Default::default(); pieces.len()];
+        // Turns: from a piece, at any point of it where the circle is clear.
+        for i in (0..total).filter(|&i| lattice.turn[i]) {
+            for h in Heading::ALL {
+                let (from, to) = (piece_at[lie(h) as usize][i], piece_at[lie(h.left()) as usize][i]);
+                if from != usize::MAX && to != usize::MAX {
+                    moves[from][usize::from(h.as_u8())].push((to, h.left()));
+                    moves[from][usize::from(h.as_u8())].push((to, h.right()));
+                }
+            }
+        }
+        // FORWARDs: from a piece to the pieces of the next cell it joins by sliding in the two.
+        for cell in 0..cells {
+            let (row, col) = (cell / frame.cols, cell % frame.cols);
+            for h in Heading::ALL {
+                let (dr, dc) = h.delta();
+                let (Some(r), Some(c)) =
+                    (row.checked_add_signed(dr as isize), col.checked_add_signed(dc as isize))
+                else {
+                    continue;
+                };
+                if r >= frame.rows || c >= frame.cols {
+                    continue;
+                }
+                let next = r * frame.cols + c;
+                let area: Vec<usize> = lattice.points(cell).chain(lattice.points(next)).collect();
+                lattice.pieces(lie(h), &area, |j| owner(j) == cell || owner(j) == next, &mut label);
+                let ids = &piece_at[lie(h) as usize];
+                let mut joined: Vec<(usize, usize)> = Vec::new(); // (label over both, piece of next)
+                for i in lattice.points(next).filter(|&i| ids[i] != usize::MAX) {
+                    joined.push((label[i], ids[i]));
+                }
+                joined.sort_unstable();
+                joined.dedup();
+                let mut from: Vec<(usize, usize)> = Vec::new(); // (label over both, piece of cell)
+                for i in lattice.points(cell).filter(|&i| ids[i] != usize::MAX) {
+                    from.push((label[i], ids[i]));
+                }
+                from.sort_unstable();
+                from.dedup();
+                for &(l, p) in &from {
+                    for &(_, q) in joined.iter().filter(|&&(l2, _)| l2 == l) {
+                        moves[p][usize::from(h.as_u8())].push((q, h));
+                    }
+                }
+            }
+        }
+        for m in moves.iter_mut().flat_map(|m| m.iter_mut()) {
+            m.sort_unstable_by_key(|&(p, h)| (p, h.as_u8()));
+            m.dedup();
+        }
+        FreeSpace { frame, pieces, moves, piece_at, lattice }
+    }
+
+    /// [`Visits`] of the lattice model (module docs) for a robot starting at the centre of
+    /// `start` facing `heading` (or at the clear point nearest it) whose commands end within
+    /// `stop_within_m` of a cell's centre. The tour bound counts only the cells `counted` marks
+    /// (row-major), e.g. those the truth connects to the start. Nothing is visited when the start
+    /// cell has no clear point facing that way.
+    pub fn visits(
+        &self,
+        (start, heading): ((usize, usize), Heading),
+        stop_within_m: f32,
+        counted: Option<&[bool]>,
+    ) -> Visits {
+        let frame = self.frame;
+        let cells = frame.rows * frame.cols;
+        let none = || tour_over_states(0, 0, |_| Vec::new(), |_| 0, cells, counted);
+        if start.0 >= frame.rows || start.1 >= frame.cols {
+            return none();
+        }
+        let start_cell = start.0 * frame.cols + start.1;
+        let ids = &self.piece_at[lie(heading) as usize];
+        let Some(start_piece) = self
+            .lattice
+            .points(start_cell)
+            .filter(|&i| ids[i] != usize::MAX)
+            .min_by(|&a, &b| self.lattice.distance_to_centre(a).total_cmp(&self.lattice.distance_to_centre(b)))
+            .map(|i| ids[i])
+        else {
+            return none();
+        };
+        // A command may end in a piece with a point near enough the centre; the robot starts in
+        // its own piece wherever that is.
+        let stops = |p: usize| p == start_piece || self.pieces[p].from_centre_m <= stop_within_m + 1e-4;
+        // States: piece × heading, index piece * 4 + heading.
+        let state = |p: usize, h: Heading| p * 4 + usize::from(h.as_u8());
+        let next = |st: usize| {
+            let (p, h) = (st / 4, st % 4);
+            self.moves[p][h].iter().filter(|&&(q, _)| stops(q)).map(|&(q, h2)| state(q, h2)).collect()
+        };
+        tour_over_states(
+            self.pieces.len() * 4,
+            state(start_piece, heading),
+            next,
+            |st| self.pieces[st / 4].cell,
+            cells,
+            counted,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::grid::room_frame;
+    use crate::scenario::Scenario;
+
+    /// A `w` × `h` m room with `obstacles`, the default robot on 0.45 m cells starting in (0, 0)
+    /// facing east, and the truth's reachable cells.
+    fn room(w: f32, h: f32, obstacles: &str) -> (Scenario, RobotProfile, GridFrame, Vec<bool>) {
+        let text = format!(
+            "Scenario(name: \"t\", room: [(0.0, 0.0), ({w:?}, 0.0), ({w:?}, {h:?}), (0.0, {h:?})], \
+             start: (row: 0, col: 0, heading: East), obstacles: [{obstacles}])"
+        );
+        let s = Scenario::from_ron_str(&text, "t.ron").unwrap();
+        let p = RobotProfile { grid_cell_m: 0.45, ..RobotProfile::default() };
+        let frame = room_frame(&s.room, 0.45);
+        let reachable = s.truth(&p).reachable_from((0, 0));
+        (s, p, frame, reachable)
+    }
+
+    fn tour(
+        s: &Scenario,
+        p: &RobotProfile,
+        frame: GridFrame,
+        clearance: f32,
+        stop: f32,
+        counted: &[bool],
+    ) -> usize {
+        FreeSpace::build(frame, &s.room, &s.obstacle_shapes(), p, clearance)
+            .visits(((0, 0), Heading::East), stop, Some(counted))
+            .tour_bound
+    }
+
+    /// A wall 1.5 cm beside the body along two cells of a row: the truth's cells are free, a body
+    /// keeping 2 cm can pass only off the centres' line, and must stop off the centres to get there.
+    #[test]
+    fn a_tight_row_needs_stops_off_the_centres() {
+        // the body's side at the centre line lies at y = 0.225 + 0.12 = 0.345: the wall at 0.36
+        let (s, p, frame, reachable) = room(1.35, 0.45, "Segment(from: (0.45, 0.36), to: (1.35, 0.36))");
+        assert_eq!(reachable.iter().filter(|&&r| r).count(), 3, "the truth: 1.5 cm is clear");
+        assert_eq!(tour(&s, &p, frame, 0.0, 0.0, &reachable), 3);
+        assert_eq!(tour(&s, &p, frame, 0.01, 0.0, &reachable), 3, "1 cm fits on the centres' line");
+        assert_eq!(tour(&s, &p, frame, 0.02, 0.0, &reachable), 1, "2 cm does not, at the centres");
+        assert_eq!(tour(&s, &p, frame, 0.02, 0.01, &reachable), 3, "1 cm below the line it does");
+        assert_eq!(tour(&s, &p, frame, 0.03, 0.02, &reachable), 3);
+        assert_eq!(tour(&s, &p, frame, 0.15, 0.02, &reachable), 0, "the start itself is too tight");
+    }
+
+    /// With no clearance and stops on the centres the lattice agrees with the cell model that turns
+    /// after a slide (`explobot truth`'s tour bound) on the documented awkward cases.
+    #[test]
+    fn on_the_centres_the_lattice_agrees_with_the_cell_model() {
+        let loaded =
+            crate::scenario::LoadedScenario::load(std::path::Path::new("docs/truth-cases.ron")).unwrap();
+        let counts = crate::truthimg::TruthCounts::of(&loaded);
+        assert_eq!(crate::truthimg::lattice_tour_bounds(&loaded, 0.0, &[0.0]), vec![counts.tour_bound]);
+    }
+
+    /// A dead end too narrow to turn in: the robot may drive in but not out, so a tour visits the
+    /// cells up to it and then the dead end's cells once, at its end (a one-way branch).
+    #[test]
+    fn a_dead_end_counts_as_one_branch() {
+        // a corridor 35.5 cm wide, 4 cells long: the turning circle (17.7 cm + 1 mm) fits
+        // nowhere in it, the body (24 cm) does
+        let (s, p, frame, reachable) = room(1.8, 0.45, "Segment(from: (0.0, 0.355), to: (1.8, 0.355))");
+        let space = FreeSpace::build(frame, &s.room, &s.obstacle_shapes(), &p, 0.0);
+        let v = space.visits(((0, 0), Heading::East), 0.0, Some(&reachable));
+        assert_eq!(v.visitable.iter().filter(|&&x| x).count(), 4, "all four cells, eastwards");
+        assert_eq!(v.round_trip.iter().filter(|&&x| x).count(), 1, "none of them can come back");
+        assert_eq!(v.tour_bound, 4);
+    }
+}
