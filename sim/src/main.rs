@@ -88,9 +88,9 @@ fn main() -> ExitCode {
             output::print_stdout(&text)?;
             Ok(ExitCode::SUCCESS)
         }),
-        Command::Encode(args) => args.encode().map_err(anyhow::Error::from).map(|bytes| {
-            println!("{}", wiretool::to_hex(&bytes));
-            ExitCode::SUCCESS
+        Command::Encode(args) => args.encode().map_err(anyhow::Error::from).and_then(|bytes| {
+            output::print_stdout(&format!("{}\n", wiretool::to_hex(&bytes)))?;
+            Ok(ExitCode::SUCCESS)
         }),
         Command::Replay(args) => replay(&args.recording, args.mcap.as_deref().map(|p| (p, args.mcap_lz4))),
         Command::Bench(args) => bench_cmd(&args),
@@ -143,7 +143,10 @@ fn recorder(
     if let Some(addr) = foxglove {
         recorder = recorder.serve(addr)?;
         let port = recorder.port().unwrap_or(addr.port());
-        println!("foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)", addr.ip());
+        output::print_stdout(&format!(
+            "foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)\n",
+            addr.ip()
+        ))?;
     }
     run.set_observer(Box::new(recorder.publisher(run)));
     Ok(Some(recorder))
@@ -178,7 +181,7 @@ fn finish_mcap(
         r.finish(Some((report, run.now())))?;
     }
     if let Some((path, _)) = mcap {
-        println!("wrote {}", path.display());
+        output::print_stdout(&format!("wrote {}\n", path.display()))?;
     }
     Ok(())
 }
@@ -201,14 +204,20 @@ fn sim_serve(args: &ServeArgs) -> Result<ExitCode> {
     let options = args.options().map_err(anyhow::Error::msg)?;
     let loaded = LoadedScenario::load_or_default(args.scenario.as_deref())?;
     let stop = serve::stop_on_ctrl_c().context("installing the Ctrl-C handler")?;
-    let ready =
-        |motor: &str, sensor: &str| println!("{}", args.ready_text(&loaded.scenario.name, motor, sensor));
-    let status = |now, twin: &sim::twin::Twin| println!("{}", serve::status_line(now, twin));
+    // the twin keeps serving whatever happens to its standard output
+    let say = |text: String| {
+        let _ = output::print_stdout(&format!("{text}\n"));
+    };
+    let ready = |motor: &str, sensor: &str| say(args.ready_text(&loaded.scenario.name, motor, sensor));
+    let status = |now, twin: &sim::twin::Twin| say(serve::status_line(now, twin));
     let recorder = match args.foxglove {
         Some(addr) => {
             let r = Recorder::new().serve(addr)?;
             let port = r.port().unwrap_or(addr.port());
-            println!("foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)", addr.ip());
+            say(format!(
+                "foxglove: serving on ws://{}:{port} (open it in Foxglove or Lichtblick)",
+                addr.ip()
+            ));
             Some(r)
         }
         None => None,
@@ -221,33 +230,33 @@ fn sim_serve(args: &ServeArgs) -> Result<ExitCode> {
         r.finish(None)?;
     }
     served?;
-    println!("twin stopped");
+    say("twin stopped".to_string());
     Ok(ExitCode::SUCCESS)
 }
 
 fn replay(path: &Path, mcap: Option<(&Path, bool)>) -> Result<ExitCode> {
     let rec = Recording::load(path)?;
     let loaded = sim::replay::rebuild(&rec)?;
-    println!("replaying {} (seed {}) ...", rec.scenario_label, rec.seed);
+    output::print_stdout(&format!("replaying {} (seed {}) ...\n", rec.scenario_label, rec.seed))?;
     let (run, wall, recorder) = run_headless(loaded, Some(rec.seed), true, mcap)?;
     let (same, line) = sim::replay::verdict(&rec, run.link_logs());
-    println!("{line}");
+    output::print_stdout(&format!("{line}\n"))?;
     finish_mcap(recorder, &run, &run.report(wall), mcap)?;
     Ok(if same { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }
 
 fn bench_cmd(args: &BenchArgs) -> Result<ExitCode> {
     let scenarios = args.load()?;
-    println!("{}", bench::physics_header(args.steps, args.rounds));
+    output::print_stdout(&format!("{}\n", bench::physics_header(args.steps, args.rounds)))?;
     for l in &scenarios {
         let figures = bench::physics(l, args.steps, usize::from(args.rounds));
-        print!("{}", bench::physics_rows(&l.scenario.name, &figures, l.dt()));
+        output::print_stdout(&bench::physics_rows(&l.scenario.name, &figures, l.dt()))?;
     }
     if !args.physics_only {
-        println!("\n{}", bench::full_stack_header());
+        output::print_stdout(&format!("\n{}\n", bench::full_stack_header()))?;
         for loaded in scenarios {
             let (run, wall, _) = run_headless(loaded, None, true, None)?;
-            println!("{}", bench::full_stack_row(&run.report(wall)));
+            output::print_stdout(&format!("{}\n", bench::full_stack_row(&run.report(wall))))?;
         }
     }
     Ok(ExitCode::SUCCESS)
@@ -257,7 +266,7 @@ fn check(scenarios: &[PathBuf]) -> Result<ExitCode> {
     let mut bad = 0;
     for path in scenarios {
         let (ok, line) = LoadedScenario::check_line(path);
-        println!("{line}");
+        output::print_stdout(&format!("{line}\n"))?;
         bad += usize::from(!ok);
     }
     if bad > 0 {

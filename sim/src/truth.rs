@@ -92,7 +92,7 @@ pub(crate) struct Solids<'a> {
 impl<'a> Solids<'a> {
     pub(crate) fn new(room: &[(f32, f32)], obstacles: &'a [PlacedShape], clearance: f32) -> Solids<'a> {
         Solids {
-            gap: TOUCH + clearance.max(0.0),
+            gap: (TOUCH + clearance).max(0.0),
             room: room_points(room),
             walls: room_edges(room).map(|w| (w, w.compute_aabb(&Pose::IDENTITY))).collect(),
             obstacles: obstacles.iter().map(|(p, s)| (p, s.as_ref(), s.compute_aabb(p))).collect(),
@@ -102,8 +102,10 @@ impl<'a> Solids<'a> {
     /// Whether `shape` at `pose` lies in the room and touches nothing: it stays more than
     /// [`TOUCH`] away from every wall and obstacle, the gap at which the run's collision counter
     /// starts counting a contact (so a turn the truth allows is never a counted collision when
-    /// made exactly at the centre), plus the clearance asked for (0 for the truth itself). A pair
-    /// parry cannot measure counts as touching (the safe side).
+    /// made exactly at the centre), plus the clearance asked for: 0 for the truth itself, less the
+    /// lattice's slack in [`crate::freespace`] (never below 0: not touching at all, parry's
+    /// distance cannot measure a penetration). A pair parry cannot measure counts as touching
+    /// (the safe side).
     pub(crate) fn clear(&self, pose: &Pose, shape: &dyn Shape) -> bool {
         if !point_in_poly2d(pose.translation, &self.room) {
             return false;
@@ -218,7 +220,7 @@ impl RobotTruth {
         let (rows, cols) = (self.rows, self.cols);
         let cells = rows * cols;
         let Some(start_cell) = self.index(start.0, start.1).filter(|_| self.is_free(start.0, start.1)) else {
-            return Visits { visitable: vec![false; cells], round_trip: vec![false; cells], tour_bound: 0 };
+            return Visits::none(cells);
         };
         // Heading::ALL lists the headings in wire order, so `as_u8` is the index.
         let state = |cell: usize, h: Heading| cell * 4 + usize::from(h.as_u8());
@@ -272,7 +274,7 @@ pub(crate) fn tour_over_states(
     let mut visitable = vec![false; cells];
     let mut round_trip = vec![false; cells];
     if start >= states {
-        return Visits { visitable, round_trip, tour_bound: 0 };
+        return Visits::none(cells);
     }
     // Forward: every state reachable from the start state.
     let mut seen = vec![false; states];
@@ -353,6 +355,13 @@ pub struct Visits {
     /// the largest one-way branch (an upper bound: a branch's cells are counted as if one walk
     /// could visit them all).
     pub tour_bound: usize,
+}
+
+impl Visits {
+    /// Nothing visited among `cells` cells.
+    pub fn none(cells: usize) -> Visits {
+        Visits { visitable: vec![false; cells], round_trip: vec![false; cells], tour_bound: 0 }
+    }
 }
 
 /// For each cell (row-major), whether the robot could turn on the spot there after sliding from

@@ -125,16 +125,20 @@ impl TruthCounts {
 /// FORWARD's two cells, turns wherever the circle is clear — keeping `clearance_m` from
 /// everything, for each distance from the centre that commands may end within in `stops_m`.
 /// Counts the cells the truth connects to the start, as coverage does.
-pub fn lattice_tour_bounds(loaded: &LoadedScenario, clearance_m: f32, stops_m: &[f32]) -> Vec<usize> {
+pub fn lattice_tour_bounds(
+    loaded: &LoadedScenario,
+    clearance_m: f32,
+    stops_m: &[f32],
+) -> Result<Vec<usize>, crate::freespace::TooLarge> {
     let s = &loaded.scenario;
     let t = loaded.truth();
     let start = (usize::from(s.start.row), usize::from(s.start.col));
     let reachable = t.reachable_from(start);
-    let space = FreeSpace::build(t.frame, &s.room, &s.obstacle_shapes(), &loaded.profile, clearance_m);
-    stops_m
+    let space = FreeSpace::build(t.frame, &s.room, &s.obstacle_shapes(), &loaded.profile, clearance_m)?;
+    Ok(stops_m
         .iter()
         .map(|&stop| space.visits((start, s.start.heading), stop, Some(&reachable)).tour_bound)
-        .collect()
+        .collect())
 }
 
 /// One line of `explobot truth --clearance`: [`lattice_tour_bounds`] for one clearance and stop.
@@ -252,6 +256,9 @@ pub enum TruthError {
         /// Why.
         message: String,
     },
+    /// The room is too large for the clearance bound's lattice.
+    #[error(transparent)]
+    TooLarge(#[from] crate::freespace::TooLarge),
 }
 
 impl TruthArgs {
@@ -260,18 +267,15 @@ impl TruthArgs {
         let loaded = LoadedScenario::load_or_default(self.scenario.as_deref())?;
         let c = TruthCounts::of(&loaded);
         let stops = if self.stop_within.is_empty() { vec![0.0, 0.02] } else { self.stop_within.clone() };
-        let bounds: Vec<ClearanceBound> = self
-            .clearance
-            .iter()
-            .flat_map(|&clearance_m| {
-                let tours = lattice_tour_bounds(&loaded, clearance_m, &stops);
-                stops.iter().zip(tours).map(move |(&stop_within_m, tour_bound)| ClearanceBound {
-                    clearance_m,
-                    stop_within_m,
-                    tour_bound,
-                })
-            })
-            .collect();
+        let mut bounds = Vec::new();
+        for &clearance_m in &self.clearance {
+            let tours = lattice_tour_bounds(&loaded, clearance_m, &stops)?;
+            bounds.extend(stops.iter().zip(tours).map(|(&stop_within_m, tour_bound)| ClearanceBound {
+                clearance_m,
+                stop_within_m,
+                tour_bound,
+            }));
+        }
         let mut text = c.text(&loaded.label, loaded.truth().frame.cell, &bounds);
         let path = self
             .out

@@ -142,3 +142,38 @@ fn truth_bounds_a_tour_for_each_clearance_and_stop_asked_for() {
     assert_eq!(out.status.code(), Some(2), "a negative clearance is refused");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A reader that closes the pipe early (`explobot … | head`) gets what it read: no panic, the
+/// exit code of the work, and the files written all the same.
+#[test]
+fn a_closed_standard_output_is_not_an_error() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-pipe-{}", std::process::id()));
+    let closed = || {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader); // every write to `writer` now fails with EPIPE
+        writer
+    };
+    let out =
+        explobot().args(["generate", "--style", "flat", "--seed", "1"]).stdout(closed()).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{err}");
+    let png = dir.join("truth.png");
+    let out = explobot()
+        .args(["truth", "sim/docs/truth-cases.ron", "--out"])
+        .arg(&png)
+        .stdout(closed())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(png.exists(), "the picture is written after the text");
+    let run = dir.join("run");
+    let out = explobot().args(["run", "--quiet", "--out"]).arg(&run).stdout(closed()).output().unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "the default room passes: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(run.join("report.json").exists() && run.join("links.rec").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -202,11 +202,12 @@ impl RunArgs {
             for note in &notes {
                 eprintln!("sweep: mcap: {note}");
             }
-            println!(
-                "sweep: wrote {} MCAP file(s) of runs that did not pass to {}/mcap/",
+            // the files are written: a closed standard output loses nothing
+            let _ = crate::output::print_stdout(&format!(
+                "sweep: wrote {} MCAP file(s) of runs that did not pass to {}/mcap/\n",
                 files.len(),
                 self.out.display()
-            );
+            ));
         }
         Ok(verdict(&self.out, totals))
     }
@@ -214,12 +215,13 @@ impl RunArgs {
 
 /// Prints the verdict line and gives the exit code.
 fn verdict(out: &std::path::Path, totals: output::Totals) -> ExitCode {
-    println!(
-        "sweep: {} of {} runs pass; wrote {}/results.jsonl, summary.md, junit.xml",
+    // the files are written: a closed standard output loses nothing
+    let _ = crate::output::print_stdout(&format!(
+        "sweep: {} of {} runs pass; wrote {}/results.jsonl, summary.md, junit.xml\n",
         totals.passed,
         totals.runs,
         out.display()
-    );
+    ));
     if totals.passed == totals.runs { ExitCode::SUCCESS } else { ExitCode::from(1) }
 }
 
