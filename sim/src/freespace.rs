@@ -92,6 +92,12 @@ fn points_per_side(frame: &GridFrame) -> usize {
     ((frame.cell / STEP_M).round() as usize).max(1) | 1
 }
 
+/// Half the diagonal between neighbouring points: no position lies farther from its nearest
+/// point, metres.
+fn slack(frame: &GridFrame) -> f32 {
+    frame.cell / points_per_side(frame) as f32 * std::f32::consts::FRAC_1_SQRT_2
+}
+
 impl Lattice {
     /// The lattice over `frame`; `solids` already keep the clearance less the slack.
     fn build(frame: GridFrame, solids: &Solids, profile: &RobotProfile) -> Lattice {
@@ -116,12 +122,6 @@ impl Lattice {
             }
         }
         Lattice { frame, n, width, height, clear, turn }
-    }
-
-    /// Half the diagonal between neighbouring points: no position lies farther from its nearest
-    /// point, metres.
-    fn slack(&self) -> f32 {
-        self.frame.cell / self.n as f32 * std::f32::consts::FRAC_1_SQRT_2
     }
 
     /// How far point `i` lies from its cell's centre, metres.
@@ -187,7 +187,6 @@ struct Piece {
 /// The free positions of the body in a room, on the lattice, for one clearance, and every
 /// command the lattice model allows between them.
 pub struct FreeSpace {
-    frame: GridFrame,
     pieces: Vec<Piece>,
     /// Per piece and heading (index `Heading::as_u8`), the pieces a command leads to and the
     /// heading after it.
@@ -213,8 +212,7 @@ impl FreeSpace {
         if points > MAX_POINTS {
             return Err(TooLarge { points, max: MAX_POINTS });
         }
-        let slack = frame.cell / n as f32 * std::f32::consts::FRAC_1_SQRT_2;
-        let solids = Solids::new(room, obstacles, clearance_m - slack);
+        let solids = Solids::new(room, obstacles, clearance_m - slack(&frame));
         let lattice = Lattice::build(frame, &solids, profile);
         let cells = frame.rows * frame.cols;
         let total = lattice.width * lattice.height;
@@ -299,7 +297,7 @@ impl FreeSpace {
             m.sort_unstable_by_key(|&(p, h)| (p, h.as_u8()));
             m.dedup();
         }
-        Ok(FreeSpace { frame, pieces, moves, piece_at, lattice })
+        Ok(FreeSpace { pieces, moves, piece_at, lattice })
     }
 
     /// [`Visits`] of the lattice model (module docs) for a robot starting in `start` facing
@@ -312,7 +310,7 @@ impl FreeSpace {
         stop_within_m: f32,
         counted: Option<&[bool]>,
     ) -> Visits {
-        let frame = self.frame;
+        let frame = self.lattice.frame;
         let cells = frame.rows * frame.cols;
         if start.0 >= frame.rows || start.1 >= frame.cols {
             return Visits::none(cells);
@@ -332,7 +330,7 @@ impl FreeSpace {
             return Visits::none(cells);
         }
         // A command ends in a piece with a point near enough the centre.
-        let reach = stop_within_m + self.lattice.slack() + 1e-4;
+        let reach = stop_within_m + slack(&frame) + 1e-4;
         let stops = |p: usize| self.pieces[p].from_centre_m <= reach;
         // States: piece × heading, index piece * 4 + heading; then one more, before the start,
         // whose next states are the pieces of the start cell.
@@ -387,7 +385,7 @@ mod tests {
     }
 
     /// A wall 1 cm beside the body along two cells of a row: the truth's cells are free, a body
-    /// keeping 2 cm (1.3 cm at lattice points, less the 0.7 cm slack) can pass only off the
+    /// keeping 2 cm (1.3 cm at lattice points: the 0.7 cm slack off) can pass only off the
     /// centres' line, and must stop off the centres to get there.
     #[test]
     fn a_tight_row_needs_stops_off_the_centres() {
