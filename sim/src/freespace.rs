@@ -175,6 +175,29 @@ impl Lattice {
     }
 }
 
+/// For each cell (row-major), whether the body standing at its centre, facing along the rows or
+/// along the columns, keeps `clearance_m` beyond the 1 mm of a touch from every wall and obstacle:
+/// exact, without the lattice's slack. `explobot truth --clearance` rings the reachable cells where
+/// it does not (the cells a robot keeping that margin must stop off the centre of, or skip).
+pub fn centre_keeps(
+    frame: GridFrame,
+    room: &[(f32, f32)],
+    obstacles: &[PlacedShape],
+    profile: &RobotProfile,
+    clearance_m: f32,
+) -> Vec<bool> {
+    let solids = Solids::new(room, obstacles, clearance_m);
+    let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
+    let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
+    (0..frame.rows * frame.cols)
+        .map(|i| {
+            let (x, y) = frame.cell_center(i / frame.cols, i % frame.cols);
+            let pose = Pose::from_translation(Vector::new(x, y));
+            bodies.iter().any(|b| solids.clear(&pose, b))
+        })
+        .collect()
+}
+
 /// One piece of a cell: lattice points the body, lying one way (which [`FreeSpace::piece_at`]
 /// says), can slide between without leaving the cell.
 #[derive(Debug, Clone, Copy)]

@@ -5,7 +5,9 @@
 //! reachable from the start, yellow free but not reachable (a closed pocket), red the robot
 //! cannot stand there —, a dark dot on free cells where the robot cannot turn on the spot, a
 //! magenta bar on the line between two free cells whose move is blocked (a thin wall between
-//! them), and the start cell framed in blue. A legend under the picture repeats this.
+//! them), and the start cell framed in blue; with `--clearance`, an orange ring in every reachable
+//! cell whose centre does not keep the first clearance asked for. A legend under the picture
+//! repeats this.
 //!
 //! ```
 //! let loaded = sim::scenario::LoadedScenario::builtin_default()?;
@@ -32,6 +34,11 @@ const NOT_FREE: ([u8; 3], f32) = ([230, 40, 40], 0.45);
 const NO_TURN: [u8; 3] = [60, 60, 60];
 const BLOCKED_MOVE: [u8; 3] = [220, 0, 200];
 const START: [u8; 3] = [30, 80, 230];
+const TIGHT: [u8; 3] = [255, 140, 0];
+
+/// The legend entry of the rings `explobot truth --clearance` adds.
+const TIGHT_ENTRY: LegendEntry =
+    LegendEntry::new(Swatch::Line(TIGHT), "ring: centre not --clearance clear (first value)");
 
 /// What the colours of `truth.png` mean.
 pub const LEGEND: [LegendEntry; 8] = [
@@ -154,6 +161,12 @@ pub struct ClearanceBound {
 
 /// Draws `truth.png` for `loaded` (see the module docs).
 pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
+    truth_picture_ringing(loaded, None)
+}
+
+/// [`truth_picture`], with an orange ring inside every reachable cell that `tight` (row-major)
+/// marks: where the body at the centre does not keep a clearance ([`crate::freespace::centre_keeps`]).
+pub fn truth_picture_ringing(loaded: &LoadedScenario, tight: Option<&[bool]>) -> RgbImage {
     let t = loaded.truth();
     let frame = t.frame;
     let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
@@ -196,14 +209,26 @@ pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
             }
         }
     }
-    let (x, y) = frame.cell_center(start.0, start.1);
-    let h = frame.cell / 2.0 - 0.01;
-    let corners = [(x - h, y - h), (x + h, y - h), (x + h, y + h), (x - h, y + h)];
-    for i in 0..4 {
-        let (a, b) = (corners[i], corners[(i + 1) % 4]);
-        thick_line(&mut img, to_px(a.0, a.1), to_px(b.0, b.1), START);
+    let square = |img: &mut RgbImage, (row, col): (usize, usize), inset: f32, color: [u8; 3]| {
+        let (x, y) = frame.cell_center(row, col);
+        let h = frame.cell / 2.0 - inset;
+        let corners = [(x - h, y - h), (x + h, y - h), (x + h, y + h), (x - h, y + h)];
+        for i in 0..4 {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            thick_line(img, to_px(a.0, a.1), to_px(b.0, b.1), color);
+        }
+    };
+    let mut legend = LEGEND.to_vec();
+    if let Some(tight) = tight {
+        let marked =
+            |i: usize| reachable.get(i).copied().unwrap_or(false) && tight.get(i).copied().unwrap_or(false);
+        for i in (0..t.rows * t.cols).filter(|&i| marked(i)) {
+            square(&mut img, (i / t.cols, i % t.cols), frame.cell * 0.3, TIGHT);
+        }
+        legend.push(TIGHT_ENTRY);
     }
-    with_legend(img, &LEGEND)
+    square(&mut img, start, 0.01, START);
+    with_legend(img, &legend)
 }
 
 /// A 4-pixel line.
@@ -285,7 +310,18 @@ impl TruthArgs {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| write(e.to_string()))?;
         }
-        truth_picture(&loaded).save(&path).map_err(|e| write(e.to_string()))?;
+        let s = &loaded.scenario;
+        let tight: Option<Vec<bool>> = self.clearance.first().map(|&c| {
+            let keeps = crate::freespace::centre_keeps(
+                loaded.truth().frame,
+                &s.room,
+                &s.obstacle_shapes(),
+                &loaded.profile,
+                c,
+            );
+            keeps.iter().map(|k| !k).collect()
+        });
+        truth_picture_ringing(&loaded, tight.as_deref()).save(&path).map_err(|e| write(e.to_string()))?;
         text.push_str(&format!("wrote {}\n", path.display()));
         crate::output::print_stdout(&text)
             .map_err(|e| TruthError::Write { path: "<stdout>".into(), message: e.to_string() })
@@ -358,5 +394,24 @@ mod tests {
         let blocked = png.pixels().filter(|p| p.0 == BLOCKED_MOVE).count();
         assert!(blocked > 100, "blocked moves are drawn ({blocked} px)");
         assert!(png.height() > png.width() * 5 / 8, "a legend is added under the room");
+    }
+
+    /// `--clearance` rings the reachable cells whose centre does not keep it, and says so in the
+    /// legend; without it there is no ring.
+    #[test]
+    fn tight_cells_are_ringed_only_when_a_clearance_is_asked() {
+        let loaded = LoadedScenario::load(std::path::Path::new("docs/truth-cases.ron")).unwrap();
+        let s = &loaded.scenario;
+        let frame = loaded.truth().frame;
+        let keeps =
+            crate::freespace::centre_keeps(frame, &s.room, &s.obstacle_shapes(), &loaded.profile, 0.02);
+        let tight: Vec<bool> = keeps.iter().map(|k| !k).collect();
+        // 0.30 m cells: every cell against a wall has 3 cm beside the 24 cm body at most
+        assert!(tight.iter().any(|&t| t) && !tight.iter().all(|&t| t), "{tight:?}");
+        let ringed = |png: &RgbImage| png.pixels().filter(|p| p.0 == TIGHT).count();
+        assert_eq!(ringed(&truth_picture(&loaded)), 0);
+        let legend_only = ringed(&truth_picture_ringing(&loaded, Some(&vec![false; tight.len()])));
+        assert!(legend_only > 0, "the legend's swatch");
+        assert!(ringed(&truth_picture_ringing(&loaded, Some(&tight))) > legend_only + 100);
     }
 }
