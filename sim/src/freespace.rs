@@ -34,12 +34,11 @@
 //! 2,000 m²); a larger grid is refused with [`TooLarge`].
 
 use rapier2d::parry::math::{Pose, Vector};
-use rapier2d::parry::shape::{Ball, Cuboid};
 use robot_model::grid::{GridFrame, Heading};
 use robot_model::profile::RobotProfile;
 
 use crate::grid::PlacedShape;
-use crate::truth::{Solids, Visits, tour_over_states};
+use crate::truth::{Solids, Visits, body_shapes, tour_over_states};
 
 /// Lattice spacing asked for; each cell holds the nearest odd number of points (rounded down
 /// when the nearest is even), one of them on its centre.
@@ -104,9 +103,7 @@ impl Lattice {
         let n = points_per_side(&frame);
         let step = frame.cell / n as f32;
         let (width, height) = (frame.cols * n, frame.rows * n);
-        let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
-        let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
-        let circle = Ball::new(half_l.hypot(half_w));
+        let (bodies, circle) = body_shapes(profile);
         let mut clear = [vec![false; width * height], vec![false; width * height]];
         let mut turn = vec![false; width * height];
         for gy in 0..height {
@@ -187,8 +184,7 @@ pub fn centre_keeps(
     clearance_m: f32,
 ) -> Vec<bool> {
     let solids = Solids::new(room, obstacles, clearance_m);
-    let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
-    let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
+    let (bodies, _) = body_shapes(profile);
     (0..frame.rows * frame.cols)
         .map(|i| {
             let (x, y) = frame.cell_center(i / frame.cols, i % frame.cols);

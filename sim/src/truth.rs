@@ -63,6 +63,16 @@ impl Stand {
     }
 }
 
+/// The body of `profile` standing along the rows and along the columns, and the circle it sweeps
+/// turning on the spot (half its diagonal).
+pub(crate) fn body_shapes(profile: &RobotProfile) -> ([Cuboid; 2], Ball) {
+    let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
+    (
+        [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))],
+        Ball::new(half_l.hypot(half_w)),
+    )
+}
+
 /// The robot-sized truth of a room (see the [module docs](self)).
 #[derive(Debug, Clone)]
 pub struct RobotTruth {
@@ -130,12 +140,10 @@ impl RobotTruth {
     ) -> RobotTruth {
         let solids = Solids::new(room, obstacles, 0.0);
         let (length, width) = (profile.geometry.body_length_m, profile.geometry.body_width_m);
-        let (half_l, half_w) = (length * 0.5, width * 0.5);
-        let along_rows = Cuboid::new(Vector::new(half_l, half_w));
-        let along_cols = Cuboid::new(Vector::new(half_w, half_l));
+        let half_w = width * 0.5;
+        let ([along_rows, along_cols], turn_circle) = body_shapes(profile);
         let sweep_east = Cuboid::new(Vector::new((frame.cell + length) * 0.5, half_w));
         let sweep_south = Cuboid::new(Vector::new(half_w, (frame.cell + length) * 0.5));
-        let turn_circle = Ball::new(half_l.hypot(half_w));
         let at = |x: f32, y: f32| Pose::from_translation(Vector::new(x, y));
         let n = frame.rows * frame.cols;
         let (mut stand, mut east, mut south, mut turn) =
@@ -379,9 +387,7 @@ pub fn turnable_after_slide(
     const STEP_M: f32 = 0.015;
     const SLIDE_STEP_M: f32 = 0.01;
     let solids = Solids::new(room, obstacles, 0.0);
-    let (half_l, half_w) = (profile.geometry.body_length_m * 0.5, profile.geometry.body_width_m * 0.5);
-    let bodies = [Cuboid::new(Vector::new(half_l, half_w)), Cuboid::new(Vector::new(half_w, half_l))];
-    let circle = Ball::new(half_l.hypot(half_w));
+    let (bodies, circle) = body_shapes(profile);
     let at = |x: f32, y: f32| Pose::from_translation(Vector::new(x, y));
     let reach = (frame.cell * 0.5 / STEP_M).floor() as i32;
     let mut offsets: Vec<(f32, f32)> = (-reach..=reach)
