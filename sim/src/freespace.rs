@@ -276,16 +276,13 @@ impl FreeSpace {
                 }
             }
         }
-        // FORWARDs: from a piece to the pieces of the next cell it joins by sliding in the two.
+        // FORWARDs: from a piece to the pieces of the next cell it joins by sliding in the two;
+        // each pair of cells once (east and south of each), for both ways.
         for cell in 0..cells {
             let (row, col) = (cell / frame.cols, cell % frame.cols);
-            for h in Heading::ALL {
+            for h in [Heading::East, Heading::South] {
                 let (dr, dc) = h.delta();
-                let (Some(r), Some(c)) =
-                    (row.checked_add_signed(dr as isize), col.checked_add_signed(dc as isize))
-                else {
-                    continue;
-                };
+                let (r, c) = (row + dr as usize, col + dc as usize);
                 if r >= frame.rows || c >= frame.cols {
                     continue;
                 }
@@ -293,21 +290,20 @@ impl FreeSpace {
                 let area: Vec<usize> = lattice.points(cell).chain(lattice.points(next)).collect();
                 lattice.pieces(lie(h), &area, |j| owner(j) == cell || owner(j) == next, &mut label);
                 let ids = &piece_at[lie(h) as usize];
-                let mut joined: Vec<(u32, u32)> = Vec::new(); // (label over both, piece of next)
-                for i in lattice.points(next).filter(|&i| ids[i] != NONE) {
-                    joined.push((label[i], ids[i]));
-                }
-                joined.sort_unstable();
-                joined.dedup();
-                let mut from: Vec<(u32, u32)> = Vec::new(); // (label over both, piece of cell)
-                for i in lattice.points(cell).filter(|&i| ids[i] != NONE) {
-                    from.push((label[i], ids[i]));
-                }
-                from.sort_unstable();
-                from.dedup();
-                for &(l, p) in &from {
-                    for &(_, q) in joined.iter().filter(|&&(l2, _)| l2 == l) {
+                // (label over both cells, piece of one cell)
+                let labelled = |of: usize| {
+                    let mut v: Vec<(u32, u32)> =
+                        lattice.points(of).filter(|&i| ids[i] != NONE).map(|i| (label[i], ids[i])).collect();
+                    v.sort_unstable();
+                    v.dedup();
+                    v
+                };
+                let (here, there) = (labelled(cell), labelled(next));
+                let back = h.left().left();
+                for &(l, p) in &here {
+                    for &(_, q) in there.iter().filter(|&&(l2, _)| l2 == l) {
                         moves[p as usize][usize::from(h.as_u8())].push((q as usize, h));
+                        moves[q as usize][usize::from(back.as_u8())].push((p as usize, back));
                     }
                 }
             }
