@@ -125,6 +125,45 @@ impl TruthCounts {
             blocked_moves,
         }
     }
+
+    /// What `explobot truth` prints for a room `label` on cells of `cell` metres, with the
+    /// lattice tour bounds asked for.
+    pub fn text(&self, label: &str, cell: f32, bounds: &[ClearanceBound]) -> String {
+        let pct = |n: usize| 100.0 * n as f64 / self.reachable.max(1) as f64;
+        let mut lines = vec![
+            format!("{label}: {} × {} cells of {cell:.2} m", self.rows, self.cols),
+            format!("  free (the robot fits)        {}", self.free),
+            format!("  reachable from the start     {}  (what coverage counts)", self.reachable),
+            format!("  reachable, turn on the spot  {}", self.reachable_turnable),
+            format!("  free but not reachable       {}", self.free - self.reachable),
+            format!("  moves blocked between free   {}", self.blocked_moves),
+            format!(
+                "  visitable without a touch    {}  (FORWARD and turns, sliding in a cell to turn)",
+                self.visitable
+            ),
+            format!("  … and back again             {}", self.round_trip),
+            format!(
+                "  one touch-free tour, at most {}  ({:.1}% of reachable: the best coverage with 0 collisions)",
+                self.tour_bound,
+                pct(self.tour_bound)
+            ),
+            format!(
+                "  … turning at centres only    {}  ({:.1}%)",
+                self.tour_bound_at_centres,
+                pct(self.tour_bound_at_centres)
+            ),
+        ];
+        for b in bounds {
+            lines.push(format!(
+                "  keeping {:.1} cm clear, stopping ≤ {:.1} cm off centres: one tour at most {}  ({:.1}%)",
+                b.clearance_m * 100.0,
+                b.stop_within_m * 100.0,
+                b.tour_bound,
+                pct(b.tour_bound)
+            ));
+        }
+        lines.iter().map(|l| format!("{l}\n")).collect()
+    }
 }
 
 /// At most how many cells one touch-free tour can visit in the lattice model of
@@ -164,9 +203,9 @@ pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
     truth_picture_ringing(loaded, None)
 }
 
-/// [`truth_picture`], with an orange ring inside every reachable cell that `tight` (row-major)
-/// marks: where the body at the centre does not keep a clearance ([`crate::freespace::centre_keeps`]).
-pub fn truth_picture_ringing(loaded: &LoadedScenario, tight: Option<&[bool]>) -> RgbImage {
+/// [`truth_picture`], with an orange ring inside every reachable cell whose centre `keeps`
+/// (row-major, [`crate::freespace::centre_keeps`]) says does not keep a clearance.
+pub fn truth_picture_ringing(loaded: &LoadedScenario, keeps: Option<&[bool]>) -> RgbImage {
     let t = loaded.truth();
     let frame = t.frame;
     let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
@@ -219,9 +258,9 @@ pub fn truth_picture_ringing(loaded: &LoadedScenario, tight: Option<&[bool]>) ->
         }
     };
     let mut legend = LEGEND.to_vec();
-    if let Some(tight) = tight {
+    if let Some(keeps) = keeps {
         let marked =
-            |i: usize| reachable.get(i).copied().unwrap_or(false) && tight.get(i).copied().unwrap_or(false);
+            |i: usize| reachable.get(i).copied().unwrap_or(false) && !keeps.get(i).copied().unwrap_or(true);
         for i in (0..t.rows * t.cols).filter(|&i| marked(i)) {
             square(&mut img, (i / t.cols, i % t.cols), frame.cell * 0.3, TIGHT);
         }
@@ -311,61 +350,19 @@ impl TruthArgs {
             std::fs::create_dir_all(dir).map_err(|e| write(e.to_string()))?;
         }
         let s = &loaded.scenario;
-        let tight: Option<Vec<bool>> = self.clearance.first().map(|&c| {
-            let keeps = crate::freespace::centre_keeps(
+        let keeps = self.clearance.first().map(|&c| {
+            crate::freespace::centre_keeps(
                 loaded.truth().frame,
                 &s.room,
                 &s.obstacle_shapes(),
                 &loaded.profile,
                 c,
-            );
-            keeps.iter().map(|k| !k).collect()
+            )
         });
-        truth_picture_ringing(&loaded, tight.as_deref()).save(&path).map_err(|e| write(e.to_string()))?;
+        truth_picture_ringing(&loaded, keeps.as_deref()).save(&path).map_err(|e| write(e.to_string()))?;
         text.push_str(&format!("wrote {}\n", path.display()));
         crate::output::print_stdout(&text)
             .map_err(|e| TruthError::Write { path: "<stdout>".into(), message: e.to_string() })
-    }
-}
-
-impl TruthCounts {
-    /// What `explobot truth` prints for a room `label` on cells of `cell` metres, with the
-    /// lattice tour bounds asked for.
-    pub fn text(&self, label: &str, cell: f32, bounds: &[ClearanceBound]) -> String {
-        let pct = |n: usize| 100.0 * n as f64 / self.reachable.max(1) as f64;
-        let mut lines = vec![
-            format!("{label}: {} × {} cells of {cell:.2} m", self.rows, self.cols),
-            format!("  free (the robot fits)        {}", self.free),
-            format!("  reachable from the start     {}  (what coverage counts)", self.reachable),
-            format!("  reachable, turn on the spot  {}", self.reachable_turnable),
-            format!("  free but not reachable       {}", self.free - self.reachable),
-            format!("  moves blocked between free   {}", self.blocked_moves),
-            format!(
-                "  visitable without a touch    {}  (FORWARD and turns, sliding in a cell to turn)",
-                self.visitable
-            ),
-            format!("  … and back again             {}", self.round_trip),
-            format!(
-                "  one touch-free tour, at most {}  ({:.1}% of reachable: the best coverage with 0 collisions)",
-                self.tour_bound,
-                pct(self.tour_bound)
-            ),
-            format!(
-                "  … turning at centres only    {}  ({:.1}%)",
-                self.tour_bound_at_centres,
-                pct(self.tour_bound_at_centres)
-            ),
-        ];
-        for b in bounds {
-            lines.push(format!(
-                "  keeping {:.1} cm clear, stopping ≤ {:.1} cm off centres: one tour at most {}  ({:.1}%)",
-                b.clearance_m * 100.0,
-                b.stop_within_m * 100.0,
-                b.tour_bound,
-                pct(b.tour_bound)
-            ));
-        }
-        lines.iter().map(|l| format!("{l}\n")).collect()
     }
 }
 
@@ -405,13 +402,12 @@ mod tests {
         let frame = loaded.truth().frame;
         let keeps =
             crate::freespace::centre_keeps(frame, &s.room, &s.obstacle_shapes(), &loaded.profile, 0.02);
-        let tight: Vec<bool> = keeps.iter().map(|k| !k).collect();
         // 0.30 m cells: every cell against a wall has 3 cm beside the 24 cm body at most
-        assert!(tight.iter().any(|&t| t) && !tight.iter().all(|&t| t), "{tight:?}");
+        assert!(keeps.iter().any(|&k| k) && !keeps.iter().all(|&k| k), "{keeps:?}");
         let ringed = |png: &RgbImage| png.pixels().filter(|p| p.0 == TIGHT).count();
         assert_eq!(ringed(&truth_picture(&loaded)), 0);
-        let legend_only = ringed(&truth_picture_ringing(&loaded, Some(&vec![false; tight.len()])));
+        let legend_only = ringed(&truth_picture_ringing(&loaded, Some(&vec![true; keeps.len()])));
         assert!(legend_only > 0, "the legend's swatch");
-        assert!(ringed(&truth_picture_ringing(&loaded, Some(&tight))) > legend_only + 100);
+        assert!(ringed(&truth_picture_ringing(&loaded, Some(&keeps))) > legend_only + 100);
     }
 }
