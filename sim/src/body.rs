@@ -6,6 +6,8 @@
 //! floor's reaction pushes the body ([`crate::drive`]); rapier advances the world. The sonar
 //! measures once per HC-SR04 cycle by casting its rays through the world.
 
+use std::collections::BTreeMap;
+
 use rand_chacha::ChaCha8Rng;
 use robot_model::kinematics::rpm_to_rad_s;
 use robot_model::motor::MotorModel;
@@ -17,6 +19,18 @@ use robot_model::time::{Duration, Instant};
 use crate::drive::DriveTrain;
 use crate::scenario::Scenario;
 use crate::world::SimWorld;
+
+/// The grid on which the points the sonar heard are kept, metres.
+const HEARD_CELL_M: f32 = 0.01;
+
+/// Echoes the sonar reported from one place ([`RobotBody::first_heard_near`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Heard {
+    /// The first one.
+    pub first: Instant,
+    /// The shortest range of any of them, metres.
+    pub nearest_m: f32,
+}
 
 /// One sonar ray as cast in the last measurement, for drawing: world start, world end, hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -44,6 +58,10 @@ pub struct RobotBody {
     last_rays: Vec<CastRay>,
     dt: Duration,
     incidence_limit: f32,
+    /// Where on each fixed shape ([`crate::world::RayHit::part`]) the sonar's reported echoes
+    /// came from, on a [`HEARD_CELL_M`] grid: when each grid cell was first heard, and the
+    /// shortest range it was heard from.
+    first_heard: BTreeMap<(usize, i32, i32), Heard>,
 }
 
 impl RobotBody {
@@ -66,6 +84,7 @@ impl RobotBody {
             world,
             last_rays: Vec::new(),
             dt,
+            first_heard: BTreeMap::new(),
         }
     }
 
@@ -100,11 +119,19 @@ impl RobotBody {
         let origin = (pose.x + c * mount.x - s * mount.y, pose.y + s * mount.x + c * mount.y);
         let max = self.sonar.max_range_m();
         let mut hits = Vec::with_capacity(self.ray_angles.len());
+        // the nearest audible hit: the reported echo comes from its shape, at its point
+        let mut nearest_echo: Option<(f32, usize, (f32, f32))> = None;
         self.last_rays.clear();
         for &a in &self.ray_angles {
             let dir_angle = pose.theta + mount.theta + a;
             let dir = (dir_angle.cos(), dir_angle.sin());
             let hit = self.world.cast_range(origin, dir, max);
+            if let Some(h) = hit.filter(|h| h.incidence <= self.incidence_limit)
+                && nearest_echo.is_none_or(|(d, _, _)| h.distance < d)
+            {
+                let at = (origin.0 + dir.0 * h.distance, origin.1 + dir.1 * h.distance);
+                nearest_echo = Some((h.distance, h.part, at));
+            }
             let reach = hit.map_or(max, |h| h.distance);
             self.last_rays.push(CastRay {
                 from: origin,
@@ -114,7 +141,31 @@ impl RobotBody {
             });
             hits.push(hit.map(|h| SonarHit { distance_m: h.distance, incidence_rad: h.incidence }));
         }
-        self.sonar.measure(now, &hits, rng);
+        if self.sonar.measure(now, &hits, rng).is_some()
+            && let Some((_, part, (x, y))) = nearest_echo
+        {
+            let key = (part, (x / HEARD_CELL_M).round() as i32, (y / HEARD_CELL_M).round() as i32);
+            let range = nearest_echo.map_or(f32::INFINITY, |(d, _, _)| d);
+            let heard = self.first_heard.entry(key).or_insert(Heard { first: now, nearest_m: range });
+            heard.nearest_m = heard.nearest_m.min(range);
+        }
+    }
+
+    /// The echoes the sonar reported from the fixed shape `part` (the room's edges first, then
+    /// the obstacles in the scenario's order) within `radius_m` of the world point `at`: the
+    /// first one's time and the shortest range; `None` if it never reported one.
+    pub fn first_heard_near(&self, part: usize, at: (f32, f32), radius_m: f32) -> Option<Heard> {
+        let cell = |v: f32| (v / HEARD_CELL_M).round() as i32;
+        let reach = (radius_m / HEARD_CELL_M).ceil() as i32 + 1;
+        let (cx, cy) = (cell(at.0), cell(at.1));
+        self.first_heard
+            .range((part, cx - reach, i32::MIN)..=(part, cx + reach, i32::MAX))
+            .filter(|&(&(_, ix, iy), _)| {
+                let (x, y) = (ix as f32 * HEARD_CELL_M, iy as f32 * HEARD_CELL_M);
+                (x - at.0).hypot(y - at.1) <= radius_m && (iy - cy).abs() <= reach
+            })
+            .map(|(_, &h)| h)
+            .reduce(|a, b| Heard { first: a.first.min(b.first), nearest_m: a.nearest_m.min(b.nearest_m) })
     }
 
     /// The latest sonar result, cm (`None` = no echo).

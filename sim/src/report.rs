@@ -125,6 +125,47 @@ pub struct FirstContact {
     /// What the robot touched (`None` in results written before it was recorded).
     #[serde(default)]
     pub touched: Option<Touched>,
+    /// Whether the sonar had reported an echo from what was touched, within [`HEARD_NEAR_M`] of
+    /// where it was touched, before the contact (`None` in results written before it was
+    /// recorded).
+    #[serde(default)]
+    pub touched_heard: Option<Heard>,
+}
+
+/// A reported echo counts for a contact if it came from the touched shape this close to where it
+/// was touched, metres: about the robot's position error bound (issue 10) plus the 3 cm a shape's
+/// corner can lie inside the body's path unheard.
+pub const HEARD_NEAR_M: f32 = 0.10;
+
+/// Whether the sonar had reported an echo from near where the robot touched a shape, before it
+/// touched it ([`HEARD_NEAR_M`]): if never, no use of the sonar's readings could have told Carto
+/// that surface was there (a face seen elsewhere says nothing of how far it goes); heard before,
+/// it was within Carto's knowledge, if only as a range.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Heard {
+    /// No reported echo came from there.
+    Never,
+    /// Reported echoes came from there.
+    Before {
+        /// The first one, seconds of sim time.
+        first_s: f64,
+        /// The shortest range of any of them, metres: from farther than about 1 m the cone is
+        /// wider than the body, and Carto keeps no such echo.
+        nearest_m: f64,
+    },
+}
+
+impl Heard {
+    /// In words, for the report.
+    pub fn describe(self) -> String {
+        match self {
+            Heard::Never => format!("never heard by the sonar within {HEARD_NEAR_M:.2} m of there before"),
+            Heard::Before { first_s, nearest_m } => format!(
+                "heard by the sonar within {HEARD_NEAR_M:.2} m of there from {first_s:.1} s, from {nearest_m:.2} m at the nearest"
+            ),
+        }
+    }
 }
 
 /// Classes of [`FirstContact`], from Carto's activity and the truth ([`crate::truth`]).
@@ -412,12 +453,13 @@ impl Report {
             let belief = c.belief_error_m.map_or(String::new(), |e| format!(", Carto's belief {e:.3} m off"));
             let _ = writeln!(
                 s,
-                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief}){}",
+                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief}){}{}",
                 c.t_s,
                 c.carto_activity,
                 c.cause.describe(),
                 c.off_centre_m,
-                c.touched.map_or(String::new(), |t| format!("; touched: {}", t.describe()))
+                c.touched.map_or(String::new(), |t| format!("; touched: {}", t.describe())),
+                c.touched_heard.map_or(String::new(), |h| format!(", {}", h.describe()))
             );
         }
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");

@@ -29,7 +29,7 @@ use crate::grid::GridFrame;
 use crate::localisation::{Localisation, carto_belief};
 use crate::mission::Operator;
 use crate::record::EndpointLog;
-use crate::report::{ContactCause, FirstContact};
+use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario};
 use crate::truth::RobotTruth;
 use crate::twin::{Twin, WriteBudget};
@@ -433,6 +433,15 @@ impl Lockstep {
                 belief_error_m: carto_believes.map(|(bx, by)| f64::from((p.x - bx).hypot(p.y - by))),
                 cause: ContactCause::classify(activity, move_ahead_exists, cell_turnable),
                 touched: self.twin.body().world().contacts_started().first().copied(),
+                touched_heard: self.twin.body().world().contacts_started_parts().first().map(
+                    |&(part, at)| match self.twin.body().first_heard_near(part, at, HEARD_NEAR_M) {
+                        Some(h) => Heard::Before {
+                            first_s: h.first.as_secs_f64(),
+                            nearest_m: f64::from(h.nearest_m),
+                        },
+                        None => Heard::Never,
+                    },
+                ),
             });
         }
     }

@@ -19,8 +19,7 @@
 
 use std::collections::BTreeSet;
 
-use rapier2d::parry::query::RayCast;
-use rapier2d::parry::shape::Compound;
+use rapier2d::parry::shape::{CompositeShapeRef, Compound};
 use rapier2d::prelude::*;
 use robot_model::kinematics::MecanumKinematics;
 use robot_model::pose::Pose2;
@@ -36,6 +35,9 @@ pub(crate) const TOUCH: f32 = 0.001;
 /// Separation above which a touch has ended (hysteresis: sliding along a wall with the gap
 /// hovering around [`TOUCH`] is one collision, not many).
 const RELEASE: f32 = 0.005;
+/// How far apart two shapes may be for the query that finds where a new contact is, metres
+/// (a push can come from a millimetre or two away).
+const TOUCH_QUERY_M: f32 = 0.01;
 
 /// A disc or box no wider than this either way is a leg, metres (`rooms.md`: legs are 2–8 cm).
 pub const LEG_MAX_M: f32 = 0.08;
@@ -160,6 +162,9 @@ pub struct RayHit {
     pub distance: f32,
     /// Angle between the ray and the surface normal, radians (0 = head-on).
     pub incidence: f32,
+    /// Which fixed shape it hit: the room's edges first, then the obstacles in the scenario's
+    /// order (the index [`SimWorld::contacts_started_parts`] uses).
+    pub part: usize,
 }
 
 /// The physics world of one scenario.
@@ -186,6 +191,9 @@ pub struct SimWorld {
     shape_kinds: Vec<Touched>,
     /// What the contacts that started in the last step touched.
     started: Vec<Touched>,
+    /// Which fixed shapes they are, and the point of each nearest the robot (world metres), in
+    /// the same order.
+    started_parts: Vec<(usize, (f32, f32))>,
     collisions: u32,
     front_contact: bool,
     speed_limit: SpeedLimit,
@@ -322,6 +330,7 @@ impl SimWorld {
             touching: BTreeSet::new(),
             shape_kinds,
             started: Vec::new(),
+            started_parts: Vec::new(),
             collisions: 0,
             front_contact: false,
             speed_limit: SpeedLimit::of(profile),
@@ -422,13 +431,26 @@ impl SimWorld {
                 );
         }
         let new_keys: Vec<(u32, u32)> = now_touching.difference(&self.touching).copied().collect();
-        self.started = new_keys
+        (self.started, self.started_parts) = new_keys
             .iter()
             .filter_map(|&(index, generation)| {
                 let collider = self.colliders.get(ColliderHandle::from_raw_parts(index, generation))?;
-                self.shape_kinds.get(collider.user_data as usize).copied()
+                let part = collider.user_data as usize;
+                // where the shapes meet (the deepest point when they overlap); the robot's centre
+                // if the query fails
+                let at = rapier2d::parry::query::contact(
+                    robot.position(),
+                    robot.shape(),
+                    collider.position(),
+                    collider.shape(),
+                    TOUCH_QUERY_M,
+                )
+                .ok()
+                .flatten()
+                .map_or(robot.translation(), |c| c.point2);
+                Some((*self.shape_kinds.get(part)?, (part, (at.x, at.y))))
             })
-            .collect();
+            .unzip();
         let started = new_keys.len() as u32;
         if started > 0 {
             let at = self.robot_body().map(|b| b.translation());
@@ -489,10 +511,15 @@ impl SimWorld {
     /// (the robot itself is transparent). A miss within `max` metres is `None`.
     pub fn cast_range(&self, origin: (f32, f32), dir: (f32, f32), max: f32) -> Option<RayHit> {
         let ray = Ray::new(Vector::new(origin.0, origin.1), Vector::new(dir.0, dir.1));
-        let hit = self.fixed_scene.as_ref()?.cast_local_ray_and_get_normal(&ray, max, true)?;
+        let (part, hit) =
+            CompositeShapeRef(self.fixed_scene.as_ref()?).cast_local_ray_and_get_normal(&ray, max, true)?;
         // Angle between the reversed ray and the surface normal.
         let cos = -(dir.0 * hit.normal.x + dir.1 * hit.normal.y);
-        Some(RayHit { distance: hit.time_of_impact, incidence: cos.abs().clamp(0.0, 1.0).acos() })
+        Some(RayHit {
+            distance: hit.time_of_impact,
+            incidence: cos.abs().clamp(0.0, 1.0).acos(),
+            part: part as usize,
+        })
     }
 
     /// The steps after which the robot moved faster than its wheels can drive it. None should
@@ -510,6 +537,12 @@ impl SimWorld {
     /// What the contacts that started in the last step touched (empty when none did).
     pub fn contacts_started(&self) -> &[Touched] {
         &self.started
+    }
+
+    /// Which fixed shapes those contacts touched ([`RayHit::part`]) and where (the point of
+    /// each nearest the robot, world metres), in the same order.
+    pub fn contacts_started_parts(&self) -> &[(usize, (f32, f32))] {
+        &self.started_parts
     }
 
     /// Whether anything touches the robot's front face now (the bumper).

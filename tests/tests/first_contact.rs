@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-use sim::report::ContactCause;
+use sim::report::{ContactCause, Heard};
 use sim::runner::Lockstep;
 use sim::scenario::LoadedScenario;
 
@@ -41,6 +41,29 @@ fn a_forward_into_a_door_jamb_the_sonar_cannot_see_is_classified_as_such() {
     assert!(first.off_centre_m < 0.225, "{first:?}");
     assert!(first.belief_error_m.is_some_and(|e| e < 0.45), "{first:?}");
     assert!(report.to_text().contains("first contact"), "{}", report.to_text());
+    // outside the cone from every cell the robot stood in: no echo ever came from the jamb
+    assert_eq!(first.touched_heard, Some(Heard::Never), "{first:?}");
+    assert!(report.to_text().contains("never heard by the sonar"), "{}", report.to_text());
+}
+
+/// The measured living room, seed 2: the robot faces the sofa's top from the row above it, 47 cm
+/// away, a minute before it turns in the row beside the sofa and its corner meets that same top
+/// (README, "Scenarios drawn as measured"). The report says the sonar had heard that spot.
+#[test]
+fn a_first_contact_says_whether_the_sonar_had_heard_the_spot_before() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/measured");
+    let loaded = LoadedScenario::load(&dir.join("default.ron")).unwrap();
+    let mut run = Lockstep::new(loaded, Some(2)).unwrap();
+    run.run_to_end(|_| {});
+    let first = run.report(1.0).first_contact.expect("the robot touches the sofa");
+    assert_eq!(first.cause, ContactCause::TurnWhereNoTurn, "{first:?}");
+    let Some(Heard::Before { first_s, nearest_m }) = first.touched_heard else {
+        panic!("the sofa's top was heard: {first:?}");
+    };
+    assert!(first_s + 30.0 < first.t_s, "{first:?}");
+    // from the row above: 0.45 m between the rows' centres, less the sonar's 13 cm mount, plus
+    // the 15 cm from the sofa's top to the centre line of the row the robot turned in
+    assert!((0.40..0.55).contains(&nearest_m), "{first:?}");
 }
 
 #[test]

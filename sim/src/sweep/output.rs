@@ -13,7 +13,7 @@ use serde::Deserialize;
 use super::SweepError;
 use super::exec::Verdict;
 use super::plan::{Manifest, generated_room, group_of, rerun_command};
-use crate::report::{ContactCause, FirstContact};
+use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
 use crate::world::Unphysical;
 
 /// Most runs listed by name in `summary.md`'s failure tables.
@@ -285,13 +285,33 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
          ground truth says of it:\n",
         records.len()
     );
-    let _ = writeln!(s, "| first contact | runs | which |");
-    let _ = writeln!(s, "|---|---:|---|");
+    let _ = writeln!(s, "| first contact | runs | never heard | which |");
+    let _ = writeln!(s, "|---|---:|---:|---|");
     for (cause, runs) in &by_cause {
         let which = capped_list(runs, |r| run_name(r));
-        let _ = writeln!(s, "| {} | {} | {} |", cause.describe(), runs.len(), cell(&which));
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            cause.describe(),
+            runs.len(),
+            never_heard(runs),
+            cell(&which)
+        );
     }
+    let _ = writeln!(
+        s,
+        "\n\"Never heard\": before the contact, the sonar had reported no echo from the touched \
+         shape within {HEARD_NEAR_M:.2} m of where it was touched (no use of the readings could \
+         have told Carto that surface was there); runs recorded before this was kept count as heard."
+    );
     touched_first(s, records);
+}
+
+/// How many of `runs` first touched something the sonar had never reported an echo from.
+fn never_heard(runs: &[&RunRecord]) -> usize {
+    runs.iter()
+        .filter(|r| r.first_contact.as_ref().is_some_and(|c| c.touched_heard == Some(Heard::Never)))
+        .count()
 }
 
 /// The second table of "First contacts": what the robot touched
@@ -304,8 +324,11 @@ fn touched_first(s: &mut String, records: &[RunRecord]) {
         }
     }
     let _ = writeln!(s, "\nWhat the robot touched first, and while doing what:\n");
-    let _ = writeln!(s, "| touched first | runs | during a FORWARD | during a turn | other | which |");
-    let _ = writeln!(s, "|---|---:|---:|---:|---:|---|");
+    let _ = writeln!(
+        s,
+        "| touched first | runs | during a FORWARD | during a turn | other | never heard | which |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---|");
     let mut rows: Vec<(&str, Vec<&RunRecord>)> = by_class.into_iter().collect();
     rows.sort_by_key(|(class, runs)| (std::cmp::Reverse(runs.len()), *class));
     for (class, runs) in rows {
@@ -317,9 +340,10 @@ fn touched_first(s: &mut String, records: &[RunRecord]) {
         let which = capped_list(&runs, |r| run_name(r));
         let _ = writeln!(
             s,
-            "| {class} | {} | {forward} | {turn} | {} | {} |",
+            "| {class} | {} | {forward} | {turn} | {} | {} | {} |",
             runs.len(),
             runs.len() - forward - turn,
+            never_heard(&runs),
             cell(&which)
         );
     }
@@ -484,8 +508,11 @@ mod tests {
         let line = |i: usize, room: &str, cause: Option<&str>| {
             // the first two touched a leg, the third a turned box; older lines have no `touched`
             let touched = match i {
-                0 | 1 => r#","touched":{"kind":"leg","width_m":0.03}"#,
-                2 => r#","touched":{"kind":"box","off_grid_deg":30.0}"#,
+                0 => r#","touched":{"kind":"leg","width_m":0.03},"touched_heard":"never""#,
+                1 => {
+                    r#","touched":{"kind":"leg","width_m":0.03},"touched_heard":{"before":{"first_s":0.5,"nearest_m":0.3}}"#
+                }
+                2 => r#","touched":{"kind":"box","off_grid_deg":30.0},"touched_heard":"never""#,
                 _ => "",
             };
             let contact = cause.map_or("null".to_string(), |c| {
@@ -510,28 +537,30 @@ mod tests {
         assert!(s.contains("3 of 4 runs touched something"), "{s}");
         assert!(
             s.contains(&format!(
-                "| {} | 2 | flat room 3 seed 0, furnished seed 1 |",
+                "| {} | 2 | 1 | flat room 3 seed 0, furnished seed 1 |",
                 ContactCause::ForwardBlockedMove.describe()
             )),
             "{s}"
         );
         assert!(s.contains(&format!(
-            "| {} | 1 | office room 1 seed 2 |",
+            "| {} | 1 | 1 | office room 1 seed 2 |",
             ContactCause::TurnWhereNoTurn.describe()
         )));
         // what they touched, most first, split by what the robot was doing
         assert!(
-            s.contains("| leg (8 cm or thinner) | 2 | 2 | 0 | 0 | flat room 3 seed 0, furnished seed 1 |"),
+            s.contains(
+                "| leg (8 cm or thinner) | 2 | 2 | 0 | 0 | 1 | flat room 3 seed 0, furnished seed 1 |"
+            ),
             "{s}"
         );
         assert!(
-            s.contains("| box turned past 22.5° from the grid | 1 | 0 | 1 | 0 | office room 1 seed 2 |"),
+            s.contains("| box turned past 22.5° from the grid | 1 | 0 | 1 | 0 | 1 | office room 1 seed 2 |"),
             "{s}"
         );
         let older = [line(3, "gen:office:2", Some("other"))];
         let mut s = String::new();
         first_contacts(&mut s, &older);
-        assert!(s.contains("| not recorded | 1 | 0 | 0 | 1 | office room 2 seed 3 |"), "{s}");
+        assert!(s.contains("| not recorded | 1 | 0 | 0 | 1 | 0 | office room 2 seed 3 |"), "{s}");
         // An older results.jsonl line without the field still reads; no contact, no table.
         let mut none = String::new();
         first_contacts(&mut none, &[line(0, "gen:flat:3", None)]);
