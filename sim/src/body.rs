@@ -25,7 +25,7 @@ const HEARD_CELL_M: f32 = 0.01;
 
 /// Echoes the sonar reported from one place ([`RobotBody::first_heard_near`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Heard {
+pub struct HeardSpot {
     /// The first one.
     pub first: Instant,
     /// The shortest range of any of them, metres.
@@ -61,7 +61,7 @@ pub struct RobotBody {
     /// Where on each fixed shape ([`crate::world::RayHit::part`]) the sonar's reported echoes
     /// came from, on a [`HEARD_CELL_M`] grid: when each grid cell was first heard, and the
     /// shortest range it was heard from.
-    first_heard: BTreeMap<(usize, i32, i32), Heard>,
+    first_heard: BTreeMap<(usize, i32, i32), HeardSpot>,
 }
 
 impl RobotBody {
@@ -142,11 +142,10 @@ impl RobotBody {
             hits.push(hit.map(|h| SonarHit { distance_m: h.distance, incidence_rad: h.incidence }));
         }
         if self.sonar.measure(now, &hits, rng).is_some()
-            && let Some((_, part, (x, y))) = nearest_echo
+            && let Some((range, part, (x, y))) = nearest_echo
         {
             let key = (part, (x / HEARD_CELL_M).round() as i32, (y / HEARD_CELL_M).round() as i32);
-            let range = nearest_echo.map_or(f32::INFINITY, |(d, _, _)| d);
-            let heard = self.first_heard.entry(key).or_insert(Heard { first: now, nearest_m: range });
+            let heard = self.first_heard.entry(key).or_insert(HeardSpot { first: now, nearest_m: range });
             heard.nearest_m = heard.nearest_m.min(range);
         }
     }
@@ -154,18 +153,18 @@ impl RobotBody {
     /// The echoes the sonar reported from the fixed shape `part` (the room's edges first, then
     /// the obstacles in the scenario's order) within `radius_m` of the world point `at`: the
     /// first one's time and the shortest range; `None` if it never reported one.
-    pub fn first_heard_near(&self, part: usize, at: (f32, f32), radius_m: f32) -> Option<Heard> {
-        let cell = |v: f32| (v / HEARD_CELL_M).round() as i32;
+    pub fn first_heard_near(&self, part: usize, at: (f32, f32), radius_m: f32) -> Option<HeardSpot> {
+        // the grid columns within reach, then the distance itself
         let reach = (radius_m / HEARD_CELL_M).ceil() as i32 + 1;
-        let (cx, cy) = (cell(at.0), cell(at.1));
+        let column = (at.0 / HEARD_CELL_M).round() as i32;
         self.first_heard
-            .range((part, cx - reach, i32::MIN)..=(part, cx + reach, i32::MAX))
+            .range((part, column - reach, i32::MIN)..=(part, column + reach, i32::MAX))
             .filter(|&(&(_, ix, iy), _)| {
                 let (x, y) = (ix as f32 * HEARD_CELL_M, iy as f32 * HEARD_CELL_M);
-                (x - at.0).hypot(y - at.1) <= radius_m && (iy - cy).abs() <= reach
+                (x - at.0).hypot(y - at.1) <= radius_m
             })
             .map(|(_, &h)| h)
-            .reduce(|a, b| Heard { first: a.first.min(b.first), nearest_m: a.nearest_m.min(b.nearest_m) })
+            .reduce(|a, b| HeardSpot { first: a.first.min(b.first), nearest_m: a.nearest_m.min(b.nearest_m) })
     }
 
     /// The latest sonar result, cm (`None` = no echo).
