@@ -20,7 +20,11 @@
 //! [`Surroundings::add_reading`] removes the points it sees through, so something that has gone,
 //! or a point misplaced by dead reckoning, does not block the robot for ever. A reading without
 //! echo clears nothing: a surface turned more than the sensor's incidence limit away returns no
-//! echo (specular loss), so "no echo" does not mean "nothing there".
+//! echo (specular loss), so "no echo" does not mean "nothing there". For the same reason a
+//! reading clears only the points heard along a ray within [`CLEARS_HEARD_WITHIN_DEG`] of its
+//! own: a sofa's top heard head-on from the row above lies at the edge of the cone of a robot
+//! driving along the row beside it, at a glancing angle that gives no echo, and the far wall's
+//! echo used to wipe it out (README, "Had the sonar heard it?").
 //!
 //! Invariants: at most [`MAX_POINTS`] points are kept (the oldest go first), and points further
 //! than [`FORGET_BEYOND_M`] from the robot are dropped when a new one is added: a stale point far
@@ -50,6 +54,10 @@ pub const MAX_POINTS: usize = 256;
 pub const FORGET_BEYOND_M: f64 = 1.5;
 /// A reading clears the points this much closer than its echo (sonar noise), metres.
 const SEEN_THROUGH_MARGIN_M: f64 = 0.02;
+/// A reading clears only the points heard from a direction this close to its own, degrees: a
+/// surface the sonar heard head-on from one side returns no echo to a cone that passes along it
+/// from another (the incidence limit), so that cone's silence says nothing of it.
+pub const CLEARS_HEARD_WITHIN_DEG: f64 = 20.0;
 
 /// A believed robot pose in the grid's metric frame (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -77,10 +85,18 @@ impl Pose2 {
     }
 }
 
+/// One echo point, and the direction of the ray it was heard along.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Echo {
+    at: (f64, f64),
+    /// Counter-clockwise from east, degrees.
+    heard_yaw_deg: f64,
+}
+
 /// Echo points around the robot (see the module docs).
 #[derive(Debug, Clone, Default)]
 pub struct Surroundings {
-    points: VecDeque<(f64, f64)>,
+    points: VecDeque<Echo>,
     /// Points known beforehand (a floor plan), never cleared nor forgotten.
     fixed: Vec<(f64, f64)>,
 }
@@ -92,8 +108,9 @@ impl Surroundings {
         if !(range_m.is_finite() && range_m >= 0.0) {
             return;
         }
-        self.points.push_back(robot.offset(mount_m + range_m, 0.0));
-        self.points.retain(|&(x, y)| (x - robot.x).hypot(y - robot.y) <= FORGET_BEYOND_M);
+        self.points
+            .push_back(Echo { at: robot.offset(mount_m + range_m, 0.0), heard_yaw_deg: robot.yaw_deg });
+        self.points.retain(|e| (e.at.0 - robot.x).hypot(e.at.1 - robot.y) <= FORGET_BEYOND_M);
         while self.points.len() > MAX_POINTS {
             self.points.pop_front();
         }
@@ -131,9 +148,10 @@ impl Surroundings {
         let sonar = Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg };
         let seen_through = range_m.min(max_range_m) - SEEN_THROUGH_MARGIN_M;
         let tan = half_cone_deg.to_radians().tan();
-        self.points.retain(|&p| {
-            let (along, left) = sonar.local(p);
-            !(along > 0.0 && along < seen_through && left.abs() <= along * tan)
+        self.points.retain(|e| {
+            let (along, left) = sonar.local(e.at);
+            let facing = angle_between_deg(e.heard_yaw_deg, sonar.yaw_deg) <= CLEARS_HEARD_WITHIN_DEG;
+            !(facing && along > 0.0 && along < seen_through && left.abs() <= along * tan)
         });
     }
 
@@ -144,8 +162,8 @@ impl Surroundings {
     /// stood (generated warehouse seed 19: 13,945 refusals in 28 minutes, until the room's time
     /// limit).
     pub fn clear_footprint(&mut self, robot: Pose2, half_length_m: f64, half_width_m: f64) {
-        self.points.retain(|&p| {
-            let (along, left) = robot.local(p);
+        self.points.retain(|e| {
+            let (along, left) = robot.local(e.at);
             along.abs() > half_length_m || left.abs() > half_width_m
         });
     }
@@ -158,7 +176,7 @@ impl Surroundings {
 
     /// The echo points and the floor plan's.
     fn all(&self) -> impl Iterator<Item = &(f64, f64)> {
-        self.points.iter().chain(self.fixed.iter())
+        self.points.iter().map(|e| &e.at).chain(self.fixed.iter())
     }
 
     /// Forgets every point (a new pose from Cute: the old points were placed from another one).
@@ -233,6 +251,11 @@ impl Surroundings {
     pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
         nearest_inside(self.all(), robot, radius_m)
     }
+}
+
+/// The angle between two directions, degrees, 0–180.
+fn angle_between_deg(a: f64, b: f64) -> f64 {
+    (a - b).rem_euclid(360.0).min((b - a).rem_euclid(360.0))
 }
 
 /// The nearest of `points`, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
@@ -348,17 +371,41 @@ mod tests {
         let mut s = Surroundings::default();
         let robot = Pose2 { x: 1.0, y: 2.0, yaw_deg: 90.0 };
         // 3 cm left of the centre: inside a 0.26 x 0.24 body facing north
-        s.points.push_back(robot.offset(0.0, 0.03));
+        let echo = |along, left| Echo { at: robot.offset(along, left), heard_yaw_deg: 90.0 };
+        s.points.push_back(echo(0.0, 0.03));
         // 2 cm beyond the front face, and 2 cm beyond the left side
-        s.points.push_back(robot.offset(0.15, 0.0));
-        s.points.push_back(robot.offset(0.0, 0.14));
+        s.points.push_back(echo(0.15, 0.0));
+        s.points.push_back(echo(0.0, 0.14));
         assert!(
             s.inside_circle(robot, 0.197).is_some_and(|(a, l)| a.abs() < 1e-9 && (l - 0.03).abs() < 1e-9)
         );
         s.clear_footprint(robot, 0.13, 0.12);
         assert_eq!(s.len(), 2);
-        let kept: Vec<(f64, f64)> = s.points.iter().map(|&p| robot.local(p)).collect();
+        let kept: Vec<(f64, f64)> = s.points.iter().map(|e| robot.local(e.at)).collect();
         assert!(kept.iter().all(|&(a, l)| a > 0.13 || l > 0.12), "{kept:?}");
+    }
+
+    #[test]
+    fn a_reading_clears_only_points_heard_from_its_own_direction() {
+        let mut s = Surroundings::default();
+        let sofa = (0.0, -0.15);
+        let near_sofa =
+            |s: &Surroundings| s.inside_circle(Pose2 { x: sofa.0, y: sofa.1, yaw_deg: 0.0 }, 0.01);
+        // a sofa's top, heard head-on from the north, 15 cm south of the line y = 0
+        let north = Pose2 { x: 0.0, y: 0.5, yaw_deg: -90.0 };
+        s.add_echo(north, MOUNT, 0.5 - sofa.1 - MOUNT);
+        assert!(near_sofa(&s).is_some());
+        // driving west along y = 0, the cone passes over that point at a glancing angle (no
+        // echo from the sofa) and hears something beyond it: the sofa's point stays
+        let west = Pose2 { x: 1.4, y: 0.0, yaw_deg: 180.0 };
+        let (along, left) = Pose2 { x: 1.4 - MOUNT, ..west }.local(sofa);
+        assert!(left.abs() <= along * 7.5_f64.to_radians().tan(), "the point lies in the cone");
+        s.add_reading(west, MOUNT, Some(1.35), 7.5, 4.0);
+        assert!(near_sofa(&s).is_some());
+        // from the north again, a longer echo says the sofa is gone
+        s.add_reading(north, MOUNT, Some(1.0), 7.5, 4.0);
+        assert!(near_sofa(&s).is_none());
+        assert_eq!(angle_between_deg(170.0, -170.0), 20.0);
     }
 
     #[test]
