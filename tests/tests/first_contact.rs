@@ -46,9 +46,10 @@ fn a_forward_into_a_door_jamb_the_sonar_cannot_see_is_classified_as_such() {
     assert!(report.to_text().contains("never heard by the sonar"), "{}", report.to_text());
 }
 
-/// The measured living room, seed 2: the robot faces the sofa's top from the row above it, 47 cm
-/// away, a minute before it turns in the row beside the sofa and its corner meets that same top
-/// (README, "Scenarios drawn as measured"). The report says the sonar had heard that spot.
+/// The measured living room, seed 2: the robot faces the sofa's top from two rows above it and
+/// drives towards it into the row above, 47 cm away, a minute before it turns in the row beside
+/// the sofa and its corner meets that same top (README, "Scenarios drawn as measured"). The
+/// report says the sonar had heard that spot.
 #[test]
 fn a_first_contact_says_whether_the_sonar_had_heard_the_spot_before() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/measured");
@@ -61,7 +62,8 @@ fn a_first_contact_says_whether_the_sonar_had_heard_the_spot_before() {
         panic!("the sofa's top was heard: {first:?}");
     };
     assert!(first_s + 30.0 < first.t_s, "{first:?}");
-    // from the row above: 0.45 m between the rows' centres, less the sonar's 13 cm mount, plus
+    // the nearest, from the row above: 0.45 m between the rows' centres, less the sonar's 13 cm
+    // mount, plus
     // the 15 cm from the sofa's top to the centre line of the row the robot turned in
     assert!((0.40..0.55).contains(&nearest_m), "{first:?}");
 }
