@@ -48,6 +48,8 @@
 
 use std::collections::VecDeque;
 
+use crate::sensors::wrap180;
+
 /// Most echo points kept.
 pub const MAX_POINTS: usize = 256;
 /// Points further than this from the robot are forgotten, metres.
@@ -150,7 +152,7 @@ impl Surroundings {
         let tan = half_cone_deg.to_radians().tan();
         self.points.retain(|e| {
             let (along, left) = sonar.local(e.at);
-            let facing = angle_between_deg(e.heard_yaw_deg, sonar.yaw_deg) <= CLEARS_HEARD_WITHIN_DEG;
+            let facing = wrap180(e.heard_yaw_deg - sonar.yaw_deg).abs() <= CLEARS_HEARD_WITHIN_DEG;
             !(facing && along > 0.0 && along < seen_through && left.abs() <= along * tan)
         });
     }
@@ -251,11 +253,6 @@ impl Surroundings {
     pub fn inside_circle(&self, robot: Pose2, radius_m: f64) -> Option<(f64, f64)> {
         nearest_inside(self.all(), robot, radius_m)
     }
-}
-
-/// The angle between two directions, degrees, 0–180.
-fn angle_between_deg(a: f64, b: f64) -> f64 {
-    (a - b).rem_euclid(360.0).min((b - a).rem_euclid(360.0))
 }
 
 /// The nearest of `points`, as `(along, left)` from `robot`, closer than `radius_m` to its centre.
@@ -405,7 +402,6 @@ mod tests {
         // from the north again, a longer echo says the sofa is gone
         s.add_reading(north, MOUNT, Some(1.0), 7.5, 4.0);
         assert!(near_sofa(&s).is_none());
-        assert_eq!(angle_between_deg(170.0, -170.0), 20.0);
     }
 
     #[test]
