@@ -119,19 +119,14 @@ impl RobotBody {
         let origin = (pose.x + c * mount.x - s * mount.y, pose.y + s * mount.x + c * mount.y);
         let max = self.sonar.max_range_m();
         let mut hits = Vec::with_capacity(self.ray_angles.len());
-        // the nearest audible hit: the reported echo comes from its shape, at its point
-        let mut nearest_echo: Option<(f32, usize, (f32, f32))> = None;
+        // which fixed shape each ray hit
+        let mut parts = Vec::with_capacity(self.ray_angles.len());
         self.last_rays.clear();
         for &a in &self.ray_angles {
             let dir_angle = pose.theta + mount.theta + a;
             let dir = (dir_angle.cos(), dir_angle.sin());
             let hit = self.world.cast_range(origin, dir, max);
-            if let Some(h) = hit.filter(|h| h.incidence <= self.incidence_limit)
-                && nearest_echo.is_none_or(|(d, _, _)| h.distance < d)
-            {
-                let at = (origin.0 + dir.0 * h.distance, origin.1 + dir.1 * h.distance);
-                nearest_echo = Some((h.distance, h.part, at));
-            }
+            parts.push(hit.map(|h| h.part));
             let reach = hit.map_or(max, |h| h.distance);
             self.last_rays.push(CastRay {
                 from: origin,
@@ -141,10 +136,14 @@ impl RobotBody {
             });
             hits.push(hit.map(|h| SonarHit { distance_m: h.distance, incidence_rad: h.incidence }));
         }
+        // the reported echo comes from the sensor's nearest audible hit: its shape, at its point
         if self.sonar.measure(now, &hits, rng).is_some()
-            && let Some((range, part, (x, y))) = nearest_echo
+            && let Some(i) = self.sonar.nearest_audible(&hits)
+            && let (Some(Some(hit)), Some(Some(part)), Some(ray)) =
+                (hits.get(i), parts.get(i), self.last_rays.get(i))
         {
-            let key = (part, (x / HEARD_CELL_M).round() as i32, (y / HEARD_CELL_M).round() as i32);
+            let (range, (x, y)) = (hit.distance_m, ray.to);
+            let key = (*part, (x / HEARD_CELL_M).round() as i32, (y / HEARD_CELL_M).round() as i32);
             let heard = self.first_heard.entry(key).or_insert(HeardSpot { first: now, nearest_m: range });
             heard.nearest_m = heard.nearest_m.min(range);
         }

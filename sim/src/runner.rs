@@ -425,6 +425,7 @@ impl Lockstep {
                 let (cx, cy) = self.truth.frame.cell_center(r, c);
                 f64::from((p.x - cx).hypot(p.y - cy))
             });
+            let start = self.twin.body().world().contacts_started().first().copied();
             self.first_contact = Some(FirstContact {
                 t_s: now.as_secs_f64(),
                 cell,
@@ -432,16 +433,16 @@ impl Lockstep {
                 off_centre_m,
                 belief_error_m: carto_believes.map(|(bx, by)| f64::from((p.x - bx).hypot(p.y - by))),
                 cause: ContactCause::classify(activity, move_ahead_exists, cell_turnable),
-                touched: self.twin.body().world().contacts_started().first().copied(),
-                touched_heard: self.twin.body().world().contacts_started_parts().first().map(
-                    |&(part, at)| match self.twin.body().first_heard_near(part, at, HEARD_NEAR_M) {
+                touched: start.map(|c| c.touched),
+                touched_heard: start.map(|c| {
+                    match self.twin.body().first_heard_near(c.part, c.at, HEARD_NEAR_M) {
                         Some(h) => Heard::Before {
                             first_s: h.first.as_secs_f64(),
                             nearest_m: f64::from(h.nearest_m),
                         },
                         None => Heard::Never,
-                    },
-                ),
+                    }
+                }),
             });
         }
     }

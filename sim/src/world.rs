@@ -163,8 +163,19 @@ pub struct RayHit {
     /// Angle between the ray and the surface normal, radians (0 = head-on).
     pub incidence: f32,
     /// Which fixed shape it hit: the room's edges first, then the obstacles in the scenario's
-    /// order (the index [`SimWorld::contacts_started_parts`] uses).
+    /// order (the index of [`ContactStart::part`]).
     pub part: usize,
+}
+
+/// A contact that started: what the robot touched, and where.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactStart {
+    /// What it is.
+    pub touched: Touched,
+    /// Which fixed shape ([`RayHit::part`]).
+    pub part: usize,
+    /// Where the shapes meet (the deepest point when they overlap), world metres.
+    pub at: (f32, f32),
 }
 
 /// The physics world of one scenario.
@@ -189,11 +200,8 @@ pub struct SimWorld {
     touching: BTreeSet<(u32, u32)>,
     /// What each fixed shape is, by its collider's `user_data`.
     shape_kinds: Vec<Touched>,
-    /// What the contacts that started in the last step touched.
-    started: Vec<Touched>,
-    /// Which fixed shapes they are, and the point of each nearest the robot (world metres), in
-    /// the same order.
-    started_parts: Vec<(usize, (f32, f32))>,
+    /// The contacts that started in the last step.
+    started: Vec<ContactStart>,
     collisions: u32,
     front_contact: bool,
     speed_limit: SpeedLimit,
@@ -330,7 +338,6 @@ impl SimWorld {
             touching: BTreeSet::new(),
             shape_kinds,
             started: Vec::new(),
-            started_parts: Vec::new(),
             collisions: 0,
             front_contact: false,
             speed_limit: SpeedLimit::of(profile),
@@ -431,7 +438,7 @@ impl SimWorld {
                 );
         }
         let new_keys: Vec<(u32, u32)> = now_touching.difference(&self.touching).copied().collect();
-        (self.started, self.started_parts) = new_keys
+        self.started = new_keys
             .iter()
             .filter_map(|&(index, generation)| {
                 let collider = self.colliders.get(ColliderHandle::from_raw_parts(index, generation))?;
@@ -448,9 +455,9 @@ impl SimWorld {
                 .ok()
                 .flatten()
                 .map_or(robot.translation(), |c| c.point2);
-                Some((*self.shape_kinds.get(part)?, (part, (at.x, at.y))))
+                Some(ContactStart { touched: *self.shape_kinds.get(part)?, part, at: (at.x, at.y) })
             })
-            .unzip();
+            .collect();
         let started = new_keys.len() as u32;
         if started > 0 {
             let at = self.robot_body().map(|b| b.translation());
@@ -534,15 +541,9 @@ impl SimWorld {
         self.collisions
     }
 
-    /// What the contacts that started in the last step touched (empty when none did).
-    pub fn contacts_started(&self) -> &[Touched] {
+    /// The contacts that started in the last step (empty when none did).
+    pub fn contacts_started(&self) -> &[ContactStart] {
         &self.started
-    }
-
-    /// Which fixed shapes those contacts touched ([`RayHit::part`]) and where (the point of
-    /// each nearest the robot, world metres), in the same order.
-    pub fn contacts_started_parts(&self) -> &[(usize, (f32, f32))] {
-        &self.started_parts
     }
 
     /// Whether anything touches the robot's front face now (the bumper).

@@ -413,7 +413,7 @@ fn touched_driving_east(obstacle: &str) -> Vec<Touched> {
     // 15 s: 5.4 m, past the room's east wall 5 m away
     for _ in 0..3000 {
         body.step(sp);
-        touched.extend_from_slice(body.world().contacts_started());
+        touched.extend(body.world().contacts_started().iter().map(|c| c.touched));
     }
     touched
 }

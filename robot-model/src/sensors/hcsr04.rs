@@ -110,16 +110,28 @@ impl HcSr04 {
         self.measurements
     }
 
+    /// Which of `hits` an echo would come from: the nearest within the incidence limit (the
+    /// first of equals); `None` when none is.
+    pub fn nearest_audible(&self, hits: &[Option<RayHit>]) -> Option<usize> {
+        let limit = self.params.incidence_limit_deg.to_radians();
+        let mut nearest: Option<(usize, f32)> = None;
+        for (i, h) in hits.iter().enumerate() {
+            if let Some(h) = h
+                && h.distance_m.is_finite()
+                && h.distance_m >= 0.0
+                && h.incidence_rad.abs() <= limit
+                && nearest.is_none_or(|(_, d)| h.distance_m < d)
+            {
+                nearest = Some((i, h.distance_m));
+            }
+        }
+        nearest.map(|(i, _)| i)
+    }
+
     /// The echo rule alone (see the module docs): hits → distance in cm or no echo.
     pub fn echo(&self, hits: &[Option<RayHit>], rng: &mut impl Rng) -> Option<f32> {
         let z: f32 = rng.sample(StandardNormal);
-        let limit = self.params.incidence_limit_deg.to_radians();
-        let nearest = hits
-            .iter()
-            .flatten()
-            .filter(|h| h.distance_m.is_finite() && h.distance_m >= 0.0 && h.incidence_rad.abs() <= limit)
-            .map(|h| h.distance_m)
-            .fold(None, |m: Option<f32>, d| Some(m.map_or(d, |m| m.min(d))))?;
+        let nearest = hits.get(self.nearest_audible(hits)?).copied().flatten()?.distance_m;
         let cm = nearest * 100.0 + z * self.params.noise_sigma_cm;
         let echo_us = (cm * ECHO_US_PER_CM).round();
         let cm = echo_us / ECHO_US_PER_CM;
@@ -152,6 +164,10 @@ mod tests {
         assert_eq!(s.echo(&[hit(0.80, 10.0), hit(0.30, -22.5)], &mut rng), Some(30.0));
         assert_eq!(s.echo(&[hit(0.40, 22.6), None], &mut rng), None);
         assert_eq!(s.echo(&[None, None], &mut rng), None);
+        // which hit the echo comes from
+        assert_eq!(s.nearest_audible(&[hit(0.40, 40.0), hit(0.80, 10.0), hit(1.2, 0.0), None]), Some(1));
+        assert_eq!(s.nearest_audible(&[hit(0.80, 10.0), hit(0.30, -22.5)]), Some(1));
+        assert_eq!(s.nearest_audible(&[hit(0.40, 22.6), None]), None);
     }
 
     #[test]
