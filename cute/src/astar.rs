@@ -1,7 +1,8 @@
 //! A* on a 4-connected grid with the Manhattan heuristic, built for speed.
 //!
 //! Concept: a [`Grid`] holds, for every cell, the cost of *entering* it (1..=255) or 0 for
-//! blocked. An [`AStar`] planner keeps every buffer it needs between queries (flat arrays indexed
+//! blocked, and which of the moves between neighbouring cells are blocked (a thin wall on the
+//! line between two free cells: [`Grid::block_move`]). An [`AStar`] planner keeps every buffer it needs between queries (flat arrays indexed
 //! by cell id, a generation stamp instead of clearing, a reusable open list), so a query allocates
 //! only the returned [`Path`]. The grid is stored with a one-cell blocked border, so neighbour
 //! look-ups need no bounds checks.
@@ -23,7 +24,7 @@
 //!   filling the whole start–goal rectangle as `(f, row, col)` does. Optimal.
 //!
 //! Invariants: a returned [`Path`] starts at the start, ends at the goal, moves one 4-neighbour
-//! step at a time through cells of non-zero cost, and its `cost` (the sum of the entered cells'
+//! step at a time through cells of non-zero cost and never over a blocked move, and its `cost` (the sum of the entered cells'
 //! costs) is minimal (except with [`TieBreak::Original`]). The start cell itself may be blocked (it is where the robot stands). No
 //! path, a blocked goal or a cell outside the grid give `None`, never a panic.
 //!
@@ -79,7 +80,8 @@ pub enum TieBreak {
     Fast,
 }
 
-/// Entry costs of a `rows × cols` grid, stored with a blocked border; 0 means blocked.
+/// Entry costs of a `rows × cols` grid, stored with a blocked border; 0 means blocked. Moves
+/// between neighbours are open unless [`Grid::block_move`] closed them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Grid {
     rows: usize,
@@ -87,6 +89,8 @@ pub struct Grid {
     stride: usize,
     max_cost: u8,
     cost: Vec<u8>,
+    /// Per padded cell, bit `d` set: the move towards `DELTAS[d]` is blocked (kept for both ends).
+    blocked_moves: Vec<u8>,
 }
 
 impl Grid {
@@ -94,9 +98,14 @@ impl Grid {
     pub fn blocked(rows: usize, cols: usize) -> Result<Grid, GridError> {
         let padded = (rows + 2).checked_mul(cols + 2);
         match padded {
-            Some(n) if rows > 0 && cols > 0 && n <= MAX_GRID_CELLS => {
-                Ok(Grid { rows, cols, stride: cols + 2, max_cost: 1, cost: vec![0; n] })
-            }
+            Some(n) if rows > 0 && cols > 0 && n <= MAX_GRID_CELLS => Ok(Grid {
+                rows,
+                cols,
+                stride: cols + 2,
+                max_cost: 1,
+                cost: vec![0; n],
+                blocked_moves: vec![0; n],
+            }),
             _ => Err(GridError::BadSize { rows, cols }),
         }
     }
@@ -104,7 +113,8 @@ impl Grid {
     /// A blocked grid the size of `map` (a map's sides are 1..=256, always a valid grid).
     pub fn for_map(map: &Map) -> Grid {
         let (rows, cols) = (map.rows(), map.cols());
-        Grid { rows, cols, stride: cols + 2, max_cost: 1, cost: vec![0; (rows + 2) * (cols + 2)] }
+        let n = (rows + 2) * (cols + 2);
+        Grid { rows, cols, stride: cols + 2, max_cost: 1, cost: vec![0; n], blocked_moves: vec![0; n] }
     }
 
     /// A grid whose cells all cost 1.
@@ -174,6 +184,40 @@ impl Grid {
             self.cost[id] = cost;
             self.max_cost = self.max_cost.max(cost);
         }
+    }
+
+    /// The index in `DELTAS` of the step from `from` to `to`, if both are on the grid and
+    /// 4-neighbours.
+    fn direction(&self, from: (usize, usize), to: (usize, usize)) -> Option<usize> {
+        if !self.contains(from.0, from.1) || !self.contains(to.0, to.1) {
+            return None;
+        }
+        DELTAS.iter().position(|&(dr, dc)| {
+            from.0.checked_add_signed(dr) == Some(to.0) && from.1.checked_add_signed(dc) == Some(to.1)
+        })
+    }
+
+    /// Blocks the move between the neighbours `a` and `b`, both ways (the costs of the cells are
+    /// left as they are). Returns false, doing nothing, if they are not 4-neighbours on the grid.
+    pub fn block_move(&mut self, a: (usize, usize), b: (usize, usize)) -> bool {
+        let Some(dir) = self.direction(a, b) else {
+            return false;
+        };
+        let (ia, ib) = (self.id(a.0, a.1), self.id(b.0, b.1));
+        self.blocked_moves[ia] |= 1 << dir;
+        self.blocked_moves[ib] |= 1 << (3 - dir); // DELTAS[3 - d] is the opposite of DELTAS[d]
+        true
+    }
+
+    /// True if `a` and `b` are 4-neighbours on the grid and the move between them is not
+    /// blocked (whatever the cells' costs).
+    pub fn is_move_open(&self, a: (usize, usize), b: (usize, usize)) -> bool {
+        self.direction(a, b).is_some_and(|dir| self.blocked_moves[self.id(a.0, a.1)] & (1 << dir) == 0)
+    }
+
+    /// Opens every move again.
+    pub fn open_all_moves(&mut self) {
+        self.blocked_moves.fill(0);
     }
 }
 
@@ -329,10 +373,11 @@ impl AStar {
                 break Some(g);
             }
             let (r, c) = (id / stride, id % stride);
+            let blocked = grid.blocked_moves[id];
             for (dir, off) in offsets.iter().enumerate() {
                 let nb = id.wrapping_add_signed(*off);
                 let step = cost[nb];
-                if step == 0 {
+                if step == 0 || blocked & (1 << dir) != 0 {
                     continue;
                 }
                 let ng = (g + u32::from(step)).min(G_MAX);
@@ -389,10 +434,11 @@ impl AStar {
                 break Some(g);
             }
             let (r, c) = (id / stride, id % stride);
+            let blocked = grid.blocked_moves[id];
             for (dir, off) in offsets.iter().enumerate() {
                 let nb = id.wrapping_add_signed(*off);
                 let step = cost[nb];
-                if step == 0 {
+                if step == 0 || blocked & (1 << dir) != 0 {
                     continue;
                 }
                 let ng = (g + u32::from(step)).min(G_MAX);

@@ -17,6 +17,15 @@
 //! because it gives the same path whenever a known detour is nearly as short, and explores
 //! otherwise, with one search instead of two.
 //!
+//! Blocked moves: a FORWARD Carto refuses into a cell the robot has stood in does not make that
+//! cell an obstacle (the robot stood there, so it fits). What was met lies between the two cells
+//! (a thin wall on the cell line, a table leg on the corner, or an echo Carto keeps), so the
+//! *move* is remembered as blocked, both ways, and A* and the unreachable flood go round it;
+//! other ways into the cell stay open. A blocked move is never tried again in this sweep: the
+//! sweep must end, and Carto would refuse it again for the same echo. A FORWARD refused into a
+//! cell nobody has stood in still makes the cell an obstacle: one refusal cannot tell a thin wall
+//! from a box, and the cell is then not entered from elsewhere either.
+//!
 //! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
 //! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
 //! the robot then marks *every* unknown cell it cannot reach as unreachable at once (a closed
@@ -54,6 +63,8 @@
 //! assert_eq!(carto.next_command(&map), None); // done
 //! assert_eq!(map.to_text(), "150\n");
 //! ```
+
+use std::collections::BTreeSet;
 
 use thiserror::Error;
 use tracing::{debug, warn};
@@ -138,6 +149,8 @@ pub struct CartoStats {
     pub turns_failed: u64,
     /// FORWARDs sent only because no turn towards the planned cell was left in the robot's cell.
     pub turn_escapes: u64,
+    /// Moves remembered as blocked: a FORWARD refused into a cell the robot had stood in.
+    pub blocked_moves: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -177,6 +190,8 @@ pub struct Cartographer {
     failed_turns: Vec<((u8, u8), Heading, Move)>,
     /// FORWARDs sent from each cell because no turn was left there (`turn_escapes`), row-major.
     escapes: Vec<u8>,
+    /// Moves between neighbouring cells known blocked, each stored once, smaller cell first.
+    blocked_moves: BTreeSet<((u8, u8), (u8, u8))>,
 }
 
 /// A cell where no turn towards the plan is left lets the robot out straight ahead at most this
@@ -219,6 +234,7 @@ impl Cartographer {
             refused_forwards: 0,
             failed_turns: Vec::new(),
             escapes: vec![0; rows * cols],
+            blocked_moves: BTreeSet::new(),
         })
     }
 
@@ -304,6 +320,23 @@ impl Cartographer {
         }
     }
 
+    /// True if the move between the neighbours `a` and `b` is remembered as blocked.
+    fn is_move_blocked(&self, a: (u8, u8), b: (u8, u8)) -> bool {
+        self.blocked_moves.contains(&(a.min(b), a.max(b)))
+    }
+
+    /// Every move remembered as blocked (each once, the smaller cell first).
+    pub fn blocked_moves(&self) -> impl Iterator<Item = ((u8, u8), (u8, u8))> + '_ {
+        self.blocked_moves.iter().copied()
+    }
+
+    /// The cell next to the robot that a FORWARD goes to, if the move there is not known blocked.
+    fn can_step(&self, map: &Map, to: (u8, u8)) -> bool {
+        Heading::between(self.pose, to).is_some()
+            && !self.is_move_blocked(self.pose, to)
+            && self.classify(map, to) != Known::Blocked
+    }
+
     fn is_open_target(&self, map: &Map, c: (u8, u8)) -> bool {
         self.classify(map, c) == Known::Unknown && self.index(c).is_some_and(|i| !self.unreachable[i])
     }
@@ -340,13 +373,11 @@ impl Cartographer {
             };
             let stale = match self.plan.last() {
                 None => true,
-                Some(&n) => {
-                    Heading::between(self.pose, n).is_none() || self.classify(map, n) == Known::Blocked
-                }
+                Some(&n) => !self.can_step(map, n),
             };
             if stale {
                 self.plan.clear();
-                if Heading::between(self.pose, target).is_some() {
+                if self.can_step(map, target) {
                     self.plan.push(target);
                 } else if !self.plan_detour(map, target) {
                     self.mark_unreachable(map, target);
@@ -432,7 +463,7 @@ impl Cartographer {
     fn escape(&mut self, map: &Map) -> Option<Move> {
         let i = self.index(self.pose)?;
         let ahead = self.heading.step(self.pose, self.rows, self.cols)?;
-        if self.classify(map, ahead) == Known::Blocked || self.escapes[i] >= MAX_ESCAPES_PER_CELL {
+        if !self.can_step(map, ahead) || self.escapes[i] >= MAX_ESCAPES_PER_CELL {
             return None;
         }
         self.escapes[i] += 1;
@@ -454,9 +485,14 @@ impl Cartographer {
         self.plan.clear();
     }
 
-    /// A* from the robot to `target` over free (1) and unknown (`unknown_cost`) cells.
+    /// A* from the robot to `target` over free (1) and unknown (`unknown_cost`) cells, round the
+    /// blocked moves.
     fn plan_detour(&mut self, map: &Map, target: (u8, u8)) -> bool {
         fill_grid(&mut self.grid, map, self.unknown_cost);
+        self.grid.open_all_moves();
+        for &(a, b) in &self.blocked_moves {
+            self.grid.block_move((usize::from(a.0), usize::from(a.1)), (usize::from(b.0), usize::from(b.1)));
+        }
         self.stats.searches += 1;
         let from = (usize::from(self.pose.0), usize::from(self.pose.1));
         let to = (usize::from(target.0), usize::from(target.1));
@@ -470,7 +506,7 @@ impl Cartographer {
         }
     }
 
-    /// Marks every unknown cell the robot cannot reach through non-blocked cells.
+    /// Marks every unknown cell the robot cannot reach through non-blocked cells and moves.
     fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
         let before = self.stats.unreachable;
         self.flood_seen.fill(false);
@@ -485,7 +521,10 @@ impl Cartographer {
                     continue;
                 };
                 let Some(i) = self.index(n) else { continue };
-                if !self.flood_seen[i] && self.classify(map, n) != Known::Blocked {
+                if !self.flood_seen[i]
+                    && self.classify(map, n) != Known::Blocked
+                    && !self.is_move_blocked(c, n)
+                {
                     self.flood_seen[i] = true;
                     self.flood_stack.push(n);
                 }
@@ -573,7 +612,15 @@ impl Cartographer {
                 self.follow_reply((x, y));
                 self.unconfirmed_turns.clear();
                 self.refused_forwards = 0;
-                if (x, y) != self.pose {
+                if map.at((x, y)).is_some_and(CellValue::is_known_free)
+                    && Heading::between(self.pose, (x, y)).is_some()
+                {
+                    // the robot has stood there, so it fits: the move is blocked, not the cell
+                    if self.blocked_moves.insert((self.pose.min((x, y)), self.pose.max((x, y)))) {
+                        self.stats.blocked_moves += 1;
+                        debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
+                    }
+                } else if (x, y) != self.pose {
                     // Outside the map it cannot be written, and needs not be: it is never planned.
                     let _ = map.set_obstacle(usize::from(x), usize::from(y));
                 }
@@ -745,6 +792,83 @@ mod tests {
         assert_eq!(c.next_command(&map), Some(Move::Forward));
         c.on_result(&mut map, MoveResult::Moved { x: 1, y: 1 });
         assert_eq!((c.pose(), c.heading(), c.stats().heading_resyncs), ((1, 1), Heading::South, 0));
+    }
+
+    /// Drives `c` until it is done, answering as a grid world where `truth` says which moves
+    /// exist: a FORWARD moves the robot, or is refused with the cell ahead. Returns the FORWARDs
+    /// sent, as (from, to).
+    fn drive(
+        c: &mut Cartographer,
+        map: &mut Map,
+        move_exists: impl Fn((u8, u8), (u8, u8)) -> bool,
+    ) -> Vec<((u8, u8), (u8, u8))> {
+        let mut forwards = Vec::new();
+        while let Some(cmd) = c.next_command(map) {
+            assert!(forwards.len() < 50, "no end: {forwards:?}");
+            let result = if cmd.is_turn() {
+                MoveResult::Turned
+            } else {
+                let ahead = c.heading().step(c.pose(), c.rows, c.cols).unwrap();
+                forwards.push((c.pose(), ahead));
+                if move_exists(c.pose(), ahead) {
+                    MoveResult::Moved { x: ahead.0, y: ahead.1 }
+                } else {
+                    MoveResult::Blocked { x: ahead.0, y: ahead.1 }
+                }
+            };
+            c.on_result(map, result);
+        }
+        forwards
+    }
+
+    /// A FORWARD refused into a cell the robot has stood in (a thin wall on the cell line): the
+    /// cell stays free, the move is blocked both ways, and the sweep goes round it.
+    #[test]
+    fn a_refused_forward_into_a_cell_stood_in_blocks_the_move_not_the_cell() {
+        // 2 x 2: (0, 0) and (1, 1) stood in, the robot in (0, 1) facing WEST, (1, 0) unknown
+        let mut map = Map::new(2, 2).unwrap();
+        map.set_free(0, 0).unwrap();
+        map.set_free(1, 1).unwrap();
+        map.set_robot(0, 1).unwrap();
+        let mut c = Cartographer::new(2, 2, (0, 1), Heading::West).unwrap();
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Blocked { x: 0, y: 0 });
+        assert_eq!(map.at((0, 0)), Some(CellValue::Free), "the robot stood there: it fits");
+        assert_eq!(c.blocked_moves().collect::<Vec<_>>(), vec![((0, 0), (0, 1))]);
+        assert_eq!(c.stats().blocked_moves, 1);
+        let wall = |a: (u8, u8), b: (u8, u8)| a.min(b) == (0, 0) && a.max(b) == (0, 1);
+        let forwards = drive(&mut c, &mut map, |a, b| !wall(a, b));
+        assert_eq!(forwards, vec![((0, 1), (1, 1)), ((1, 1), (1, 0))], "round the wall");
+        assert_eq!(map.to_text(), "11\n51\n");
+        assert!(c.unreachable_cells().is_empty());
+    }
+
+    /// When the blocked move was the only way, the cells behind it are unreachable, and the cell
+    /// stood in stays free.
+    #[test]
+    fn cells_behind_the_only_blocked_move_are_unreachable() {
+        // 1 x 3 corridor: (0, 0) unknown, (0, 1) stood in, the robot in (0, 2) facing WEST
+        let mut map = Map::new(1, 3).unwrap();
+        map.set_free(0, 1).unwrap();
+        map.set_robot(0, 2).unwrap();
+        let mut c = Cartographer::new(1, 3, (0, 2), Heading::West).unwrap();
+        c.pending = Some(Move::Forward);
+        c.on_result(&mut map, MoveResult::Blocked { x: 0, y: 1 });
+        assert_eq!(drive(&mut c, &mut map, |_, _| true), vec![], "the blocked move is not tried again");
+        assert!(c.is_done());
+        assert_eq!(c.unreachable_cells(), vec![(0, 0)]);
+        assert_eq!(map.to_text(), "215\n");
+    }
+
+    /// A FORWARD refused into a cell nobody has stood in still makes it an obstacle.
+    #[test]
+    fn a_refused_forward_into_an_unknown_cell_marks_an_obstacle() {
+        let mut map = Map::new(1, 2).unwrap();
+        map.set_robot(0, 0).unwrap();
+        let mut c = Cartographer::new(1, 2, (0, 0), Heading::East).unwrap();
+        assert_eq!(drive(&mut c, &mut map, |_, _| false), vec![((0, 0), (0, 1))]);
+        assert_eq!(map.to_text(), "50\n");
+        assert_eq!(c.blocked_moves().count(), 0);
     }
 
     #[test]

@@ -13,6 +13,7 @@ fn check_path(grid: &Grid, path: &Path, start: (usize, usize), goal: (usize, usi
         let d = w[0].0.abs_diff(w[1].0) + w[0].1.abs_diff(w[1].1);
         assert_eq!(d, 1, "non-adjacent step {:?}", w);
         assert!(grid.is_passable(w[1].0, w[1].1));
+        assert!(grid.is_move_open(w[0], w[1]), "blocked move {:?}", w);
         total += u32::from(grid.cost(w[1].0, w[1].1));
     }
     assert_eq!(total, path.cost);
@@ -33,7 +34,7 @@ fn oracle(grid: &Grid, start: (usize, usize), goal: (usize, usize)) -> Option<u3
         }
         for (dr, dc) in DELTAS {
             let (nr, nc) = (r.wrapping_add_signed(dr), c.wrapping_add_signed(dc));
-            if grid.is_passable(nr, nc) {
+            if grid.is_passable(nr, nc) && grid.is_move_open((r, c), (nr, nc)) {
                 let nd = d + u32::from(grid.cost(nr, nc));
                 if nd < dist[nr * grid.cols + nc] {
                     dist[nr * grid.cols + nc] = nd;
@@ -43,6 +44,41 @@ fn oracle(grid: &Grid, start: (usize, usize), goal: (usize, usize)) -> Option<u3
         }
     }
     None
+}
+
+/// A thin wall on the line between two free cells: the path goes round it, in every order.
+#[test]
+fn a_blocked_move_between_free_cells_is_walked_round() {
+    let mut grid = Grid::open(2, 3).unwrap();
+    assert!(grid.block_move((0, 1), (0, 2)));
+    assert!(!grid.is_move_open((0, 2), (0, 1)), "blocked both ways");
+    assert!(grid.is_move_open((0, 1), (1, 1)));
+    assert!(grid.is_passable(0, 2), "the cells stay free");
+    let mut a = AStar::new();
+    for tb in [TieBreak::Fast, TieBreak::Reference, TieBreak::Original] {
+        let p = a.search_with(&grid, (0, 0), (0, 2), tb).unwrap();
+        assert_eq!(p.cost, 4, "{tb:?}");
+        check_path(&grid, &p, (0, 0), (0, 2));
+        assert_eq!(p.cells[p.cells.len() - 2], (1, 2), "{tb:?}: the goal is entered from below");
+    }
+    // closing the way below too leaves no path
+    assert!(grid.block_move((1, 2), (1, 1)));
+    for tb in [TieBreak::Fast, TieBreak::Reference, TieBreak::Original] {
+        assert_eq!(a.search_with(&grid, (0, 0), (0, 2), tb), None, "{tb:?}");
+    }
+    grid.open_all_moves();
+    assert_eq!(a.search(&grid, (0, 0), (0, 2)).map(|p| p.cost), Some(2));
+}
+
+#[test]
+fn block_move_refuses_cells_that_are_not_neighbours() {
+    let mut grid = Grid::open(3, 3).unwrap();
+    assert!(!grid.block_move((0, 0), (1, 1)));
+    assert!(!grid.block_move((0, 0), (0, 2)));
+    assert!(!grid.block_move((2, 2), (2, 3)), "off the grid");
+    assert!(!grid.block_move((1, 1), (1, 1)));
+    assert!(!grid.is_move_open((2, 2), (2, 3)));
+    assert_eq!(grid, Grid::open(3, 3).unwrap());
 }
 
 #[test]
@@ -205,11 +241,19 @@ mod prop {
             cells in proptest::collection::vec(0u8..6, 196),
             s in (0usize..14, 0usize..14), t in (0usize..14, 0usize..14),
             unit in proptest::bool::ANY,
+            walls in proptest::collection::vec((0usize..14, 0usize..14, 0usize..4), 0..30),
         ) {
             // 0 → blocked, 1..=3 → cost 1, 4..=5 → cost 3 (or 1 with unit costs).
-            let grid = Grid::from_fn(rows, cols, |r, c| match cells[r * 14 + c] {
+            let mut grid = Grid::from_fn(rows, cols, |r, c| match cells[r * 14 + c] {
                 0 => 0, 1..=3 => 1, _ => if unit { 1 } else { 3 },
             }).unwrap();
+            // thin walls between neighbours (those leaving the grid are refused and ignored)
+            for (r, c, d) in walls {
+                let (dr, dc) = DELTAS[d];
+                if let (Some(nr), Some(nc)) = (r.checked_add_signed(dr), c.checked_add_signed(dc)) {
+                    grid.block_move((r, c), (nr, nc));
+                }
+            }
             let start = (s.0 % rows, s.1 % cols);
             let goal = (t.0 % rows, t.1 % cols);
             let mut a = AStar::new();
