@@ -20,11 +20,12 @@
 //! Blocked moves: a FORWARD Carto refuses into a cell the robot has stood in does not make that
 //! cell an obstacle (the robot stood there, so it fits). What was met lies between the two cells
 //! (a thin wall on the cell line, a table leg on the corner, or an echo Carto keeps), so the
-//! *move* is remembered as blocked, both ways, and A* and the unreachable flood go round it;
-//! other ways into the cell stay open. A blocked move is never tried again in this sweep: the
-//! sweep must end, and Carto would refuse it again for the same echo. A FORWARD refused into a
-//! cell nobody has stood in still makes the cell an obstacle: one refusal cannot tell a thin wall
-//! from a box, and the cell is then not entered from elsewhere either.
+//! *move* is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), and A* and
+//! the unreachable flood go round it; other ways into the cell stay open. A blocked move is not
+//! tried again until the map is reset: the sweep must end, and Carto would refuse it again for
+//! the same echo. A FORWARD refused into a cell nobody has stood in still makes the cell an
+//! obstacle: one refusal cannot tell a thin wall from a box, so that cell is not entered from
+//! elsewhere either.
 //!
 //! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
 //! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
@@ -64,13 +65,11 @@
 //! assert_eq!(map.to_text(), "150\n");
 //! ```
 
-use std::collections::BTreeSet;
-
 use thiserror::Error;
 use tracing::{debug, warn};
 
 use crate::astar::{AStar, Grid, TieBreak};
-use crate::map::{CellValue, MAX_SIDE, Map};
+use crate::map::{CellValue, MAX_SIDE, Map, Refusal};
 use crate::trajectory::fill_grid;
 use robot_model::grid::{Heading, Move};
 
@@ -190,8 +189,6 @@ pub struct Cartographer {
     failed_turns: Vec<((u8, u8), Heading, Move)>,
     /// FORWARDs sent from each cell because no turn was left there (`turn_escapes`), row-major.
     escapes: Vec<u8>,
-    /// Moves between neighbouring cells known blocked, each stored once, smaller cell first.
-    blocked_moves: BTreeSet<((u8, u8), (u8, u8))>,
 }
 
 /// A cell where no turn towards the plan is left lets the robot out straight ahead at most this
@@ -234,7 +231,6 @@ impl Cartographer {
             refused_forwards: 0,
             failed_turns: Vec::new(),
             escapes: vec![0; rows * cols],
-            blocked_moves: BTreeSet::new(),
         })
     }
 
@@ -320,20 +316,10 @@ impl Cartographer {
         }
     }
 
-    /// True if the move between the neighbours `a` and `b` is remembered as blocked.
-    fn is_move_blocked(&self, a: (u8, u8), b: (u8, u8)) -> bool {
-        self.blocked_moves.contains(&(a.min(b), a.max(b)))
-    }
-
-    /// Every move remembered as blocked (each once, the smaller cell first).
-    pub fn blocked_moves(&self) -> impl Iterator<Item = ((u8, u8), (u8, u8))> + '_ {
-        self.blocked_moves.iter().copied()
-    }
-
-    /// The cell next to the robot that a FORWARD goes to, if the move there is not known blocked.
+    /// True if `to` is next to the robot, not known blocked, and the move there is not blocked.
     fn can_step(&self, map: &Map, to: (u8, u8)) -> bool {
         Heading::between(self.pose, to).is_some()
-            && !self.is_move_blocked(self.pose, to)
+            && !map.is_move_blocked(self.pose, to)
             && self.classify(map, to) != Known::Blocked
     }
 
@@ -489,10 +475,6 @@ impl Cartographer {
     /// blocked moves.
     fn plan_detour(&mut self, map: &Map, target: (u8, u8)) -> bool {
         fill_grid(&mut self.grid, map, self.unknown_cost);
-        self.grid.open_all_moves();
-        for &(a, b) in &self.blocked_moves {
-            self.grid.block_move((usize::from(a.0), usize::from(a.1)), (usize::from(b.0), usize::from(b.1)));
-        }
         self.stats.searches += 1;
         let from = (usize::from(self.pose.0), usize::from(self.pose.1));
         let to = (usize::from(target.0), usize::from(target.1));
@@ -523,7 +505,7 @@ impl Cartographer {
                 let Some(i) = self.index(n) else { continue };
                 if !self.flood_seen[i]
                     && self.classify(map, n) != Known::Blocked
-                    && !self.is_move_blocked(c, n)
+                    && !map.is_move_blocked(c, n)
                 {
                     self.flood_seen[i] = true;
                     self.flood_stack.push(n);
@@ -612,17 +594,10 @@ impl Cartographer {
                 self.follow_reply((x, y));
                 self.unconfirmed_turns.clear();
                 self.refused_forwards = 0;
-                if map.at((x, y)).is_some_and(CellValue::is_known_free)
-                    && Heading::between(self.pose, (x, y)).is_some()
-                {
-                    // the robot has stood there, so it fits: the move is blocked, not the cell
-                    if self.blocked_moves.insert((self.pose.min((x, y)), self.pose.max((x, y)))) {
-                        self.stats.blocked_moves += 1;
-                        debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
-                    }
-                } else if (x, y) != self.pose {
-                    // Outside the map it cannot be written, and needs not be: it is never planned.
-                    let _ = map.set_obstacle(usize::from(x), usize::from(y));
+                // Outside the map nothing is written, and needs not be: it is never planned.
+                if map.note_refused_forward(self.pose, (x, y)) == (Refusal::MoveBlocked { new: true }) {
+                    self.stats.blocked_moves += 1;
+                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
                 }
                 self.plan.clear();
             }
@@ -834,7 +809,7 @@ mod tests {
         c.pending = Some(Move::Forward);
         c.on_result(&mut map, MoveResult::Blocked { x: 0, y: 0 });
         assert_eq!(map.at((0, 0)), Some(CellValue::Free), "the robot stood there: it fits");
-        assert_eq!(c.blocked_moves().collect::<Vec<_>>(), vec![((0, 0), (0, 1))]);
+        assert_eq!(map.blocked_moves().collect::<Vec<_>>(), vec![((0, 0), (0, 1))]);
         assert_eq!(c.stats().blocked_moves, 1);
         let wall = |a: (u8, u8), b: (u8, u8)| a.min(b) == (0, 0) && a.max(b) == (0, 1);
         let forwards = drive(&mut c, &mut map, |a, b| !wall(a, b));
@@ -868,7 +843,7 @@ mod tests {
         let mut c = Cartographer::new(1, 2, (0, 0), Heading::East).unwrap();
         assert_eq!(drive(&mut c, &mut map, |_, _| false), vec![((0, 0), (0, 1))]);
         assert_eq!(map.to_text(), "50\n");
-        assert_eq!(c.blocked_moves().count(), 0);
+        assert_eq!(map.blocked_moves().count(), 0);
     }
 
     #[test]

@@ -169,6 +169,20 @@ impl MapLayout {
         Rect::from_corners(min, min + Vec2::splat(self.cell))
     }
 
+    /// The side two neighbouring cells share, as a segment (for a blocked move); `None` if they
+    /// are not 4-neighbours.
+    pub fn shared_side(&self, a: (u8, u8), b: (u8, u8)) -> Option<(Vec2, Vec2)> {
+        let (first, second) = (a.min(b), a.max(b));
+        let r = self.cell_rect(usize::from(first.0), usize::from(first.1));
+        if second == (first.0, first.1.wrapping_add(1)) {
+            Some((Vec2::new(r.max.x, r.min.y), r.max))
+        } else if second == (first.0.wrapping_add(1), first.1) {
+            Some((Vec2::new(r.min.x, r.max.y), r.max))
+        } else {
+            None
+        }
+    }
+
     /// The cell under logical point `p`, if any.
     pub fn cell_at(&self, p: Vec2) -> Option<(u8, u8)> {
         let rel = (p - self.origin) / self.cell;
@@ -471,6 +485,16 @@ fn draw_map_overlay<R: CuteAccess>(
     }
     let border = Color::srgb(0.85, 0.87, 0.92);
     gizmos.rect_2d(w(rect.center()), rect.size() + Vec2::splat(4.0), border);
+    // Blocked moves: the side the two cells share, in red, three lines thick.
+    let blocked = Color::srgb(0.9, 0.15, 0.1);
+    for (a, b) in map.blocked_moves() {
+        if let Some((p, q)) = layout.shared_side(a, b) {
+            let across = if p.x == q.x { Vec2::X } else { Vec2::Y };
+            for k in [-1.0, 0.0, 1.0] {
+                gizmos.line_2d(w(p + across * k), w(q + across * k), blocked);
+            }
+        }
+    }
     // The robot: a ring and an arrow towards its heading.
     let (x, y, heading) = cute.robot();
     let cell = layout.cell_rect(usize::from(x), usize::from(y));

@@ -8,9 +8,16 @@
 //! Coordinates follow the `link` protocol: `x` is the row (grows downward), `y` the column
 //! (grows rightward), origin top-left, one byte each.
 //!
+//! Besides the cells, the map keeps the **blocked moves**: pairs of neighbouring cells the robot
+//! cannot drive between although it has stood in both (a thin wall on the cell line, a leg on
+//! the corner). [`Map::note_refused_forward`] is the one rule that turns a refused FORWARD into
+//! a blocked move or an obstacle; A* plans round both ([`crate::trajectory::fill_grid`]).
+//!
 //! Invariants: at most one cell holds [`CellValue::Robot`] and it is [`Map::robot`]; at most one
 //! holds [`CellValue::Destination`] and it is [`Map::destination`]; cells are stored and iterated
-//! in row-major order. Waypoint, destination and robot cells are known to be free.
+//! in row-major order. Waypoint, destination and robot cells are known to be free. A blocked
+//! move joins two 4-neighbours on the map. The text form ([`Map::to_text`], [`Map::parse`])
+//! carries the cells only, as the original's map files do: blocked moves are not saved.
 //!
 //! ```
 //! use cute::map::{CellValue, Map};
@@ -23,6 +30,7 @@
 //! ```
 
 use core::fmt;
+use std::collections::BTreeSet;
 
 use thiserror::Error;
 
@@ -115,6 +123,14 @@ pub enum MapError {
         /// Map columns.
         cols: usize,
     },
+    /// Two cells that are not 4-neighbours, given as a move.
+    #[error("cells {a:?} and {b:?} are not neighbours")]
+    NotNeighbours {
+        /// One cell.
+        a: (u8, u8),
+        /// The other.
+        b: (u8, u8),
+    },
     /// A number that is not a cell value.
     #[error("{value} is not a cell value (0..=5)")]
     BadValue {
@@ -176,6 +192,23 @@ pub struct Map {
     cells: Vec<CellValue>,
     robot: Option<(u8, u8)>,
     destination: Option<(u8, u8)>,
+    /// Each blocked move once, the smaller cell first.
+    blocked_moves: BTreeSet<((u8, u8), (u8, u8))>,
+}
+
+/// What [`Map::note_refused_forward`] concluded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Refusal {
+    /// The cell ahead is known free (the robot stood there): the move is blocked, the cell stays
+    /// free. `new` is false if the move was already known blocked.
+    MoveBlocked {
+        /// First time this move is blocked.
+        new: bool,
+    },
+    /// The cell ahead was not known free: it is now an obstacle.
+    Obstacle,
+    /// Nothing written: the cell is off the map or the robot's own cell.
+    Nothing,
 }
 
 impl Map {
@@ -184,7 +217,14 @@ impl Map {
         if rows == 0 || cols == 0 || rows > MAX_SIDE || cols > MAX_SIDE {
             return Err(MapError::BadSize { rows, cols });
         }
-        Ok(Map { rows, cols, cells: vec![CellValue::Unknown; rows * cols], robot: None, destination: None })
+        Ok(Map {
+            rows,
+            cols,
+            cells: vec![CellValue::Unknown; rows * cols],
+            robot: None,
+            destination: None,
+            blocked_moves: BTreeSet::new(),
+        })
     }
 
     /// Number of rows (the `x` range).
@@ -331,11 +371,59 @@ impl Map {
         self.destination = None;
     }
 
-    /// Sets every cell back to unknown (2) and drops both markers (the RESET button).
+    /// Sets every cell back to unknown (2), drops both markers and every blocked move (the RESET
+    /// button).
     pub fn reset(&mut self) {
         self.cells.fill(CellValue::Unknown);
         self.robot = None;
         self.destination = None;
+        self.blocked_moves.clear();
+    }
+
+    /// Records that the robot cannot drive between the 4-neighbours `a` and `b` (both ways).
+    /// Returns whether it is new; an error if either cell is off the map or they are not
+    /// neighbours. The cells keep their values.
+    pub fn block_move(&mut self, a: (u8, u8), b: (u8, u8)) -> Result<bool, MapError> {
+        for (x, y) in [a, b] {
+            self.checked_index(usize::from(x), usize::from(y))?;
+        }
+        if a.0.abs_diff(b.0) + a.1.abs_diff(b.1) != 1 {
+            return Err(MapError::NotNeighbours { a, b });
+        }
+        Ok(self.blocked_moves.insert((a.min(b), a.max(b))))
+    }
+
+    /// True if the move between `a` and `b` was recorded blocked ([`Map::block_move`]).
+    pub fn is_move_blocked(&self, a: (u8, u8), b: (u8, u8)) -> bool {
+        self.blocked_moves.contains(&(a.min(b), a.max(b)))
+    }
+
+    /// Every blocked move, each once (the smaller cell first), in order.
+    pub fn blocked_moves(&self) -> impl Iterator<Item = ((u8, u8), (u8, u8))> + '_ {
+        self.blocked_moves.iter().copied()
+    }
+
+    /// Carto refused a FORWARD from `from` into its neighbour `ahead` (SET_OBSTACLE_POSITION).
+    /// A cell the map knows free had the robot in it, so the robot fits there: what was met lies
+    /// between the two cells, and the *move* is blocked. Any other cell becomes an obstacle: one
+    /// refusal cannot tell a thin wall from a box. The robot's own cell and cells off the map
+    /// are left alone.
+    pub fn note_refused_forward(&mut self, from: (u8, u8), ahead: (u8, u8)) -> Refusal {
+        let Some(value) = self.at(ahead) else {
+            return Refusal::Nothing;
+        };
+        if ahead == from {
+            return Refusal::Nothing;
+        }
+        if value.is_known_free() {
+            if let Ok(new) = self.block_move(from, ahead) {
+                return Refusal::MoveBlocked { new };
+            }
+        }
+        match self.set_obstacle(usize::from(ahead.0), usize::from(ahead.1)) {
+            Ok(()) => Refusal::Obstacle,
+            Err(_) => Refusal::Nothing,
+        }
     }
 
     /// The map as text: one line per row, one digit (the cell's number) per cell.
@@ -417,6 +505,31 @@ impl fmt::Display for Map {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_refused_forward_blocks_the_move_into_a_free_cell_and_marks_any_other_cell() {
+        let mut map = Map::parse("512\n").unwrap();
+        assert_eq!(map.note_refused_forward((0, 0), (0, 1)), Refusal::MoveBlocked { new: true });
+        assert_eq!(map.note_refused_forward((0, 1), (0, 0)), Refusal::MoveBlocked { new: false });
+        assert!(map.is_move_blocked((0, 1), (0, 0)) && map.is_move_blocked((0, 0), (0, 1)));
+        assert_eq!(map.to_text(), "512\n", "the cells keep their values");
+        assert_eq!(map.note_refused_forward((0, 1), (0, 2)), Refusal::Obstacle);
+        assert_eq!(map.to_text(), "510\n");
+        assert_eq!(map.note_refused_forward((0, 2), (0, 3)), Refusal::Nothing, "off the map");
+        assert_eq!(map.note_refused_forward((0, 0), (0, 0)), Refusal::Nothing, "the robot's cell");
+        assert_eq!(map.blocked_moves().collect::<Vec<_>>(), vec![((0, 0), (0, 1))]);
+        map.reset();
+        assert_eq!(map.blocked_moves().count(), 0);
+    }
+
+    #[test]
+    fn block_move_needs_two_neighbours_on_the_map() {
+        let mut map = Map::new(2, 2).unwrap();
+        assert_eq!(map.block_move((0, 0), (1, 1)), Err(MapError::NotNeighbours { a: (0, 0), b: (1, 1) }));
+        assert!(matches!(map.block_move((1, 1), (1, 2)), Err(MapError::OutOfBounds { .. })));
+        assert_eq!(map.block_move((1, 1), (0, 1)), Ok(true));
+        assert_eq!(map.blocked_moves().collect::<Vec<_>>(), vec![((0, 1), (1, 1))]);
+    }
 
     #[test]
     fn new_map_is_all_unknown_and_sized() {

@@ -124,14 +124,15 @@ pub fn commands_for_path(path: &[(u8, u8)], heading: Heading) -> Result<(Vec<Mov
 }
 
 /// Builds the A* grid for a map: known free cells cost 1, unknown cells cost `unknown_cost`
-/// (0 = impassable), obstacles are blocked.
+/// (0 = impassable), obstacles are blocked, and so are the map's blocked moves.
 pub fn grid_from_map(map: &Map, unknown_cost: u8) -> Grid {
     let mut grid = Grid::for_map(map);
     fill_grid(&mut grid, map, unknown_cost);
     grid
 }
 
-/// Refreshes `grid` (same size as `map`) from the map, as [`grid_from_map`] does.
+/// Refreshes `grid` (same size as `map`) from the map, as [`grid_from_map`] does: the cells'
+/// costs and the map's blocked moves.
 pub fn fill_grid(grid: &mut Grid, map: &Map, unknown_cost: u8) {
     for ((x, y), v) in map.iter() {
         let cost = match v {
@@ -140,6 +141,10 @@ pub fn fill_grid(grid: &mut Grid, map: &Map, unknown_cost: u8) {
             _ => 1,
         };
         grid.set_cost(usize::from(x), usize::from(y), cost);
+    }
+    grid.open_all_moves();
+    for (a, b) in map.blocked_moves() {
+        grid.block_move((usize::from(a.0), usize::from(a.1)), (usize::from(b.0), usize::from(b.1)));
     }
 }
 
@@ -345,6 +350,27 @@ mod tests {
             Planner::new().plan(&map, (0, 0), Heading::East, (0, 2)),
             Err(PlanError::NoPath { from_x: 0, from_y: 0, to_x: 0, to_y: 2 })
         );
+    }
+
+    /// A blocked move on the map (a thin wall between two free cells) is planned round, and a
+    /// planner that keeps its grid forgets it after a reset.
+    #[test]
+    fn blocked_moves_are_planned_round() {
+        let mut map = Map::parse("111\n111\n").unwrap();
+        let mut planner = Planner::new();
+        let straight = planner.plan(&map, (0, 0), Heading::East, (0, 2)).unwrap();
+        assert_eq!(straight.path, vec![(0, 0), (0, 1), (0, 2)]);
+        map.block_move((0, 1), (0, 2)).unwrap();
+        let round = planner.plan(&map, (0, 0), Heading::East, (0, 2)).unwrap();
+        assert_eq!(round.path.len(), 5, "{:?}", round.path);
+        assert_eq!(round.path[3..], [(1, 2), (0, 2)]);
+        map.reset();
+        for x in 0..2 {
+            for y in 0..3 {
+                map.set_free(x, y).unwrap();
+            }
+        }
+        assert_eq!(planner.plan(&map, (0, 0), Heading::East, (0, 2)).unwrap(), straight);
     }
 
     #[test]

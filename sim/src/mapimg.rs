@@ -2,7 +2,8 @@
 //!
 //! The true room is drawn first (outside the walls dark grey, obstacles black, floor white), then
 //! each grid cell is tinted by what Cute's map says (free green, obstacle red, unknown left
-//! untinted), then the grid lines, the robot's true trail (blue), the trail Carto believed (dashed
+//! untinted), then the grid lines, the moves Cute recorded blocked (a magenta bar on the side
+//! the two cells share), the robot's true trail (blue), the trail Carto believed (dashed
 //! orange: the centre of the cell Carto stores plus its dead-reckoned offset, see
 //! [`crate::localisation::carto_belief`]) and the final pose (a box with a line towards its
 //! heading). A legend strip under the picture says what each colour means. A cell that is red
@@ -30,9 +31,11 @@ const GRID_LINE: [u8; 3] = [170, 170, 200];
 const TRUE_TRAIL: [u8; 3] = [30, 80, 230];
 const BELIEVED_TRAIL: [u8; 3] = [245, 140, 0];
 const ROBOT: [u8; 3] = [0, 0, 160];
+/// A move Cute's map records as blocked.
+const BLOCKED_MOVE: [u8; 3] = [200, 0, 170];
 
 /// What the colours of `map.png` mean, in the order the legend shows them.
-pub const LEGEND: [LegendEntry; 8] = [
+pub const LEGEND: [LegendEntry; 9] = [
     LegendEntry::new(Swatch::Fill(PALETTE.floor), "floor"),
     LegendEntry::new(Swatch::Fill(PALETTE.obstacle), "wall/obstacle"),
     LegendEntry::new(Swatch::Fill(PALETTE.outside), "outside the room"),
@@ -44,6 +47,7 @@ pub const LEGEND: [LegendEntry; 8] = [
         Swatch::Tint { base: PALETTE.floor, tint: OBSTACLE_TINT.0, alpha: OBSTACLE_TINT.1 },
         "Cute: obstacle",
     ),
+    LegendEntry::new(Swatch::Line(BLOCKED_MOVE), "Cute: blocked move"),
     LegendEntry::new(Swatch::Line(TRUE_TRAIL), "true trail"),
     LegendEntry::new(Swatch::Dashed(BELIEVED_TRAIL), "Carto's belief"),
     LegendEntry::new(Swatch::Line(ROBOT), "robot at the end"),
@@ -64,6 +68,8 @@ pub struct MapPicture<'a> {
     pub frame: GridFrame,
     /// Cute's knowledge per cell, row-major: `Some(true)` free, `Some(false)` obstacle.
     pub known: &'a [Option<bool>],
+    /// Moves Cute's map records as blocked: pairs of neighbouring `(row, col)` cells.
+    pub blocked_moves: &'a [((u8, u8), (u8, u8))],
     /// The robot's true trail, world metres.
     pub trail: &'a [(f32, f32)],
     /// Where Carto believed the robot was, sampled with the true trail, world metres.
@@ -85,6 +91,17 @@ impl MapPicture<'_> {
             }
         });
         let to_px = |x: f32, y: f32| grid.to_px(x, y);
+        for &(a, b) in self.blocked_moves {
+            if let Some((p, q)) = shared_side(&self.frame, a, b) {
+                let (p, q) = (to_px(p.0, p.1), to_px(q.0, q.1));
+                // three pixels wide, across the side
+                let across = if (p.0 - q.0).abs() < 0.5 { (1.0, 0.0) } else { (0.0, 1.0) };
+                for k in [-1.0, 0.0, 1.0] {
+                    let shift = |c: (f32, f32)| (c.0 + across.0 * k, c.1 + across.1 * k);
+                    line(&mut img, shift(p), shift(q), BLOCKED_MOVE);
+                }
+            }
+        }
         // Trails: the true one, then Carto's belief dashed over it.
         for pair in self.trail.windows(2) {
             line(&mut img, to_px(pair[0].0, pair[0].1), to_px(pair[1].0, pair[1].1), TRUE_TRAIL);
@@ -103,6 +120,24 @@ impl MapPicture<'_> {
         line(&mut img, to_px(x, y), corner(hl * 1.6, 0.0), ROBOT);
         with_legend(img, &LEGEND)
     }
+}
+
+/// The side two 4-neighbouring cells share, world metres (`None` if they are not neighbours or
+/// off the grid).
+fn shared_side(frame: &GridFrame, a: (u8, u8), b: (u8, u8)) -> Option<((f32, f32), (f32, f32))> {
+    let (a, b) = ((usize::from(a.0), usize::from(a.1)), (usize::from(b.0), usize::from(b.1)));
+    if a.0.abs_diff(b.0) + a.1.abs_diff(b.1) != 1 || a.0.max(b.0) >= frame.rows || a.1.max(b.1) >= frame.cols
+    {
+        return None;
+    }
+    let (ca, cb) = (frame.cell_center(a.0, a.1), frame.cell_center(b.0, b.1));
+    let mid = ((ca.0 + cb.0) * 0.5, (ca.1 + cb.1) * 0.5);
+    let half = frame.cell * 0.5;
+    Some(if a.0 == b.0 {
+        ((mid.0, mid.1 - half), (mid.0, mid.1 + half))
+    } else {
+        ((mid.0 - half, mid.1), (mid.0 + half, mid.1))
+    })
 }
 
 /// The true room with each grid cell's pixels passed through `tint(row, col, colour)`, and the
@@ -136,4 +171,25 @@ pub fn room_canvas(
         line(&mut img, to_px(x, f.top), to_px(x, f.top - f.rows as f32 * f.cell), GRID_LINE);
     }
     (img, grid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_blocked_move_is_drawn_on_the_side_the_cells_share() {
+        let frame = GridFrame::for_bounds((0.0, 0.0), (1.2, 0.9), 0.3);
+        let (a, right, below) = (frame.cell_center(1, 1), frame.cell_center(1, 2), frame.cell_center(2, 1));
+        let (p, q) = shared_side(&frame, (1, 1), (1, 2)).expect("neighbours");
+        let x = (a.0 + right.0) * 0.5;
+        assert_eq!((p.0, q.0), (x, x), "a vertical side half-way between the centres");
+        assert!(((q.1 - p.1).abs() - 0.3).abs() < 1e-6, "one cell long");
+        assert_eq!(shared_side(&frame, (1, 2), (1, 1)), Some((p, q)));
+        let (p, q) = shared_side(&frame, (2, 1), (1, 1)).expect("neighbours");
+        let y = (a.1 + below.1) * 0.5;
+        assert_eq!((p.1, q.1), (y, y));
+        assert_eq!(shared_side(&frame, (1, 1), (2, 2)), None);
+        assert_eq!(shared_side(&frame, (2, 3), (3, 3)), None, "row 3 is off a 3-row grid");
+    }
 }

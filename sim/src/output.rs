@@ -166,6 +166,7 @@ pub fn map_picture(run: &Lockstep, known: &[Option<bool>]) -> image::RgbImage {
         scenario: &run.loaded().scenario,
         frame: run.frame(),
         known,
+        blocked_moves: &run.blocked_moves(),
         trail: run.trail(),
         believed_trail: run.believed_trail(),
         pose: (pose.x, pose.y, pose.theta),

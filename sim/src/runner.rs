@@ -634,4 +634,9 @@ impl Lockstep {
         }
         out
     }
+
+    /// The moves Cute's map records as blocked (each once, the smaller cell first).
+    pub fn blocked_moves(&self) -> Vec<((u8, u8), (u8, u8))> {
+        self.cute.cute().map().blocked_moves().collect()
+    }
 }

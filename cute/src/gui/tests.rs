@@ -31,6 +31,22 @@ fn cell_at_inverts_cell_rect_and_rejects_outside() {
     assert_eq!(l.cell_at(Vec2::new(m.max.x + 0.5, m.center().y)), None);
 }
 
+/// A blocked move is drawn on the side the two cells share, whichever order they are given in.
+#[test]
+fn shared_side_is_the_edge_between_two_neighbours() {
+    let l = MapLayout::compute(Vec2::new(800.0, 600.0), &CuteView::default(), 5, 5);
+    let (a, right, below) = (l.cell_rect(2, 2), l.cell_rect(2, 3), l.cell_rect(3, 2));
+    let side = l.shared_side((2, 2), (2, 3)).unwrap();
+    assert_eq!(side, (Vec2::new(a.max.x, a.min.y), a.max));
+    assert_eq!((side.0.x, side.1.x), (right.min.x, right.min.x), "the left side of the right cell");
+    assert_eq!(l.shared_side((2, 3), (2, 2)), Some(side));
+    let side = l.shared_side((3, 2), (2, 2)).unwrap();
+    assert_eq!(side, (Vec2::new(a.min.x, a.max.y), a.max));
+    assert_eq!(side.0.y, below.min.y);
+    assert_eq!(l.shared_side((2, 2), (3, 3)), None);
+    assert_eq!(l.shared_side((2, 2), (2, 4)), None);
+}
+
 #[test]
 fn tiny_windows_still_give_positive_cells() {
     let l = MapLayout::compute(Vec2::new(50.0, 40.0), &CuteView::default(), 256, 256);

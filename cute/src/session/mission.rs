@@ -68,7 +68,10 @@ impl Belief {
         }
     }
 
-    /// Marks `(x, y)` as an obstacle, unless the robot stands there.
+    /// Marks `(x, y)` as an obstacle, unless the robot stands there. Used outside mapping (a
+    /// trajectory, an unsolicited report), where the map may be older than the room: a box put
+    /// down since is the likelier story than a thin wall, so the cell is marked even if the robot
+    /// once stood there. Mapping blocks the move instead ([`Map::note_refused_forward`]).
     pub(crate) fn mark_obstacle(&mut self, x: u8, y: u8) {
         if (x, y) != self.robot {
             let _ = self.map.set_obstacle(usize::from(x), usize::from(y));
