@@ -60,6 +60,9 @@ pub struct MapScore {
     pub reachable: usize,
     /// Reachable cells Cute shows as free.
     pub reachable_known_free: usize,
+    /// Reachable cells Cute shows as obstacles: coverage lost to a refusal or a bump, not to a
+    /// cell left unknown (the rest of the reachable cells not known free).
+    pub reachable_marked_obstacle: usize,
     /// Cells Cute has classified (free or obstacle).
     pub classified: usize,
     /// Classified cells that agree with the truth.
@@ -77,8 +80,10 @@ impl MapScore {
                 let k = known.get(i).copied().flatten();
                 if reachable[i] {
                     s.reachable += 1;
-                    if k == Some(true) {
-                        s.reachable_known_free += 1;
+                    match k {
+                        Some(true) => s.reachable_known_free += 1,
+                        Some(false) => s.reachable_marked_obstacle += 1,
+                        None => {}
                     }
                 }
                 if let Some(free) = k {
@@ -421,9 +426,13 @@ impl Report {
         for e in &self.mission_errors {
             let _ = writeln!(s, "  error         {e}");
         }
+        let marked = match self.map.reachable_marked_obstacle {
+            0 => String::new(),
+            n => format!(" ({n} reachable marked obstacle)"),
+        };
         let _ = writeln!(
             s,
-            "map             {}x{} grid, coverage {:.1}% of {} reachable cells, accuracy {:.1}% of {} classified",
+            "map             {}x{} grid, coverage {:.1}% of {} reachable cells{marked}, accuracy {:.1}% of {} classified",
             self.grid.0,
             self.grid.1,
             self.coverage * 100.0,
