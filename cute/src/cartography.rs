@@ -43,9 +43,9 @@
 //!
 //! Invariants: [`Cartographer::next_command`] returns `None` (done) only when every map cell is
 //! known, proven unreachable, or given up because no turn towards it is left (above); with
-//! every turn made, every cell reachable from the start has been visited. It never asks for a
-//! FORWARD into a cell the map shows as an obstacle or off the map, nor a turn it has seen fail
-//! from the same cell and heading. Each search, bump or failed turn gains information, so the
+//! every turn made, every cell reachable from the start by moves not refused has been visited.
+//! It never asks for a FORWARD into a cell the map shows as an obstacle or off the map, nor along
+//! a blocked move, nor a turn it has seen fail from the same cell and heading. Each search, bump or failed turn gains information, so the
 //! sweep always ends. The room's outer walls need not be
 //! known: cells outside the room are met as obstacles like any other.
 //!
@@ -769,8 +769,8 @@ mod tests {
         assert_eq!((c.pose(), c.heading(), c.stats().heading_resyncs), ((1, 1), Heading::South, 0));
     }
 
-    /// Drives `c` until it is done, answering as a grid world where `truth` says which moves
-    /// exist: a FORWARD moves the robot, or is refused with the cell ahead. Returns the FORWARDs
+    /// Drives `c` until it is done, answering as a grid world where `move_exists` says which
+    /// moves exist: a FORWARD moves the robot, or is refused with the cell ahead. Returns the FORWARDs
     /// sent, as (from, to).
     fn drive(
         c: &mut Cartographer,
