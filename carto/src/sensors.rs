@@ -276,9 +276,9 @@ impl SensorState {
     /// a collision turned the body under slipping wheels, or the counters were reset. It
     /// re-anchors the estimate, and so does every sample for [`SLIP_HOLD`] after it (the push may
     /// go on); then the anchor is set from the mean of the next [`SLIP_SETTLE_SAMPLES`]
-    /// samples, and the estimate follows the gap again only after that. The wheels' heading is taken at the IMU sample's time (each encoder's count moved
-    /// along at its rate), so encoders that report at different moments open no gap while
-    /// driving. No sample is taken while `turning` (the controller drives a turn or a look, or one
+    /// samples, and the estimate follows the gap again only after that. The wheels' heading is
+    /// taken at the IMU sample's time (each encoder's count moved along at its rate), so
+    /// encoders that report at different moments open no gap while driving. No sample is taken while `turning` (the controller drives a turn or a look, or one
     /// ended less than [`crate::motor::SETTLE_AFTER_TURN`] ago): the rates alone let the ends of
     /// a turn through, where the IMU's noise decides which samples pass and the estimate was
     /// pulled off by a few tenths of a degree.

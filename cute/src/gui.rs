@@ -174,12 +174,10 @@ impl MapLayout {
     pub fn shared_side(&self, a: (u8, u8), b: (u8, u8)) -> Option<(Vec2, Vec2)> {
         let (first, second) = (a.min(b), a.max(b));
         let r = self.cell_rect(usize::from(first.0), usize::from(first.1));
-        if second == (first.0, first.1.wrapping_add(1)) {
-            Some((Vec2::new(r.max.x, r.min.y), r.max))
-        } else if second == (first.0.wrapping_add(1), first.1) {
-            Some((Vec2::new(r.min.x, r.max.y), r.max))
-        } else {
-            None
+        // the smaller cell is the upper or the left one
+        match Heading::between(first, second)? {
+            Heading::East => Some((Vec2::new(r.max.x, r.min.y), r.max)),
+            _ => Some((Vec2::new(r.min.x, r.max.y), r.max)),
         }
     }
 

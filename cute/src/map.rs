@@ -32,6 +32,7 @@
 use core::fmt;
 use std::collections::BTreeSet;
 
+use robot_model::grid::Heading;
 use thiserror::Error;
 
 /// The largest number of rows or columns (coordinates are one byte on the wire).
@@ -387,7 +388,7 @@ impl Map {
         for (x, y) in [a, b] {
             self.checked_index(usize::from(x), usize::from(y))?;
         }
-        if a.0.abs_diff(b.0) + a.1.abs_diff(b.1) != 1 {
+        if Heading::between(a, b).is_none() {
             return Err(MapError::NotNeighbours { a, b });
         }
         Ok(self.blocked_moves.insert((a.min(b), a.max(b))))

@@ -12,6 +12,7 @@
 //! is.
 
 use image::{Rgb, RgbImage};
+use robot_model::grid::Heading;
 
 use crate::grid::GridFrame;
 use crate::picture::{LegendEntry, Swatch, blend, dashed_polyline, line, with_legend};
@@ -125,15 +126,15 @@ impl MapPicture<'_> {
 /// The side two 4-neighbouring cells share, world metres (`None` if they are not neighbours or
 /// off the grid).
 fn shared_side(frame: &GridFrame, a: (u8, u8), b: (u8, u8)) -> Option<((f32, f32), (f32, f32))> {
+    let across_columns = matches!(Heading::between(a, b)?, Heading::East | Heading::West);
     let (a, b) = ((usize::from(a.0), usize::from(a.1)), (usize::from(b.0), usize::from(b.1)));
-    if a.0.abs_diff(b.0) + a.1.abs_diff(b.1) != 1 || a.0.max(b.0) >= frame.rows || a.1.max(b.1) >= frame.cols
-    {
+    if a.0.max(b.0) >= frame.rows || a.1.max(b.1) >= frame.cols {
         return None;
     }
     let (ca, cb) = (frame.cell_center(a.0, a.1), frame.cell_center(b.0, b.1));
     let mid = ((ca.0 + cb.0) * 0.5, (ca.1 + cb.1) * 0.5);
     let half = frame.cell * 0.5;
-    Some(if a.0 == b.0 {
+    Some(if across_columns {
         ((mid.0, mid.1 - half), (mid.0, mid.1 + half))
     } else {
         ((mid.0 - half, mid.1), (mid.0 + half, mid.1))
