@@ -691,29 +691,29 @@ mod tests {
         assert!((still.imu_drift_deg() + 0.25).abs() < 0.03, "{}", still.imu_drift_deg());
     }
 
+    /// A robot whose wheels stand still (at rest, or slipping under a push) while the IMU reads
+    /// `yaws`, one sample every 100 ms, with the default configuration.
+    fn imu_over_still_wheels(yaws: impl IntoIterator<Item = f64>) -> SensorState {
+        let cfg = CartoConfig::default();
+        let mut s = SensorState::default();
+        for (k, yaw) in (0u64..).zip(yaws) {
+            feed(&mut s, &cfg, ms(100 * k), yaw, 0.0, false);
+        }
+        s
+    }
+
     #[test]
     fn a_body_turned_slowly_under_slipping_wheels_is_slip_not_drift() {
         // Generated flat seed 26 (issue 10): a robot pushed round by a leg turned 4° at under
         // 3°/s while its wheels slipped; the estimate, which only knew 10° jumps, followed the
         // gap at 3°/min and turned every later FORWARD off the grid by up to 6°.
-        let cfg = CartoConfig::default();
-        let mut s = SensorState::default();
-        let mut t = 0;
-        let mut step = |s: &mut SensorState, yaw: f64| {
-            feed(s, &cfg, ms(t), yaw, 0.0, false);
-            t += 100;
-        };
-        for _ in 0..50 {
-            step(&mut s, 0.0);
-        }
-        // 4° in 2 s (2°/s): every sample passes the rate check
-        for k in 1..=20 {
-            step(&mut s, 0.2 * f64::from(k));
-        }
-        // then 2 minutes of straight driving with the body really at 4°
-        for _ in 0..1200 {
-            step(&mut s, 4.0);
-        }
+        let s = imu_over_still_wheels(
+            std::iter::repeat_n(0.0, 50)
+                // 4° in 2 s (2°/s): every sample passes the rate check
+                .chain((1..=20).map(|k| 0.2 * f64::from(k)))
+                // then 2 minutes of straight driving with the body really at 4°
+                .chain(std::iter::repeat_n(4.0, 1200)),
+        );
         assert!(s.imu_drift_deg().abs() < 0.2, "estimate {:.2}° (the slip is 4°)", s.imu_drift_deg());
         assert!((s.yaw_deg().unwrap().value - 4.0).abs() < 0.2, "{:?}", s.yaw_deg());
     }
@@ -724,26 +724,16 @@ mod tests {
     /// minutes. The anchor is now the mean of the samples after the hold.
     #[test]
     fn a_slip_is_anchored_on_the_samples_after_it_not_on_one() {
-        let cfg = CartoConfig::default();
-        let mut s = SensorState::default();
-        let mut t = 0;
-        let mut step = |s: &mut SensorState, yaw: f64| {
-            feed(s, &cfg, ms(t), yaw, 0.0, false);
-            t += 100;
-        };
-        for _ in 0..50 {
-            step(&mut s, 0.0);
-        }
-        // a push turns the body 4° under slipping wheels, and 0.5° more for the last 0.3 s of
-        // the 2 s hold (the first of those samples fails the rate check, the others are taken)
-        for k in 0..20 {
-            step(&mut s, if k >= 17 { 4.5 } else { 4.0 });
-        }
+        let s = imu_over_still_wheels(
+            std::iter::repeat_n(0.0, 50)
+                // a push turns the body 4° under slipping wheels, and 0.5° more for the last
+                // 0.3 s of the 2 s hold (the first of those samples fails the rate check, the
+                // others are taken)
+                .chain((0..20).map(|k| if k >= 17 { 4.5 } else { 4.0 }))
+                // then the body settles at 4° for 2 minutes of straight driving, the IMU jittering
+                .chain((0..1200).map(|k| if k % 2 == 0 { 4.05 } else { 3.95 })),
+        );
         assert_eq!(s.imu_drift_jumps(), 1);
-        // then the body settles at 4° for 2 minutes of straight driving, the IMU jittering
-        for k in 0..1200 {
-            step(&mut s, if k % 2 == 0 { 4.05 } else { 3.95 });
-        }
         assert!(s.imu_drift_deg().abs() < 0.1, "estimate {:.2}° (no drift)", s.imu_drift_deg());
         assert!((s.yaw_deg().unwrap().value - 4.0).abs() < 0.1, "{:?}", s.yaw_deg());
     }
