@@ -146,10 +146,11 @@ struct DriftEstimate {
     settling: Option<Settling>,
 }
 
-/// The samples gathered for a new anchor after a slip (see [`SLIP_SETTLE_SAMPLES`]).
+/// The samples gathered for a new anchor after a slip (see [`SLIP_SETTLE_SAMPLES`]): their sum
+/// and how many.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Settling {
-    anchors: [f64; SLIP_SETTLE_SAMPLES],
+    sum: f64,
     n: usize,
 }
 
@@ -269,19 +270,20 @@ impl SensorState {
     ///
     /// The difference between the IMU heading and the wheels' heading is constant while neither
     /// drifts nor slips; its slow change is taken to be IMU drift (a NavX drifts about 0.5°/min).
-    /// It is sampled only while the robot is not turning (both rates under 3°/s), low-pass
-    /// filtered with [`CartoConfig::imu_drift_tau_s`], and the estimate moves at most
+    /// It is sampled only while the robot is not turning (both rates under 3°/s), low-pass filtered
+    /// with [`CartoConfig::imu_drift_tau_s`], and the estimate moves at most
     /// [`CartoConfig::imu_drift_max_deg_per_min`], so wheel slip (a collision, a turn) can only
-    /// pull it slowly. A gap more than [`DRIFT_JUMP_DEG`] beyond the estimate is slip, not drift:
-    /// a collision turned the body under slipping wheels, or the counters were reset. It
-    /// re-anchors the estimate, and so does every sample for [`SLIP_HOLD`] after it (the push may
-    /// go on); then the anchor is set from the mean of the next [`SLIP_SETTLE_SAMPLES`]
-    /// samples, and the estimate follows the gap again only after that. The wheels' heading is
-    /// taken at the IMU sample's time (each encoder's count moved along at its rate), so
-    /// encoders that report at different moments open no gap while driving. No sample is taken while `turning` (the controller drives a turn or a look, or one
-    /// ended less than [`crate::motor::SETTLE_AFTER_TURN`] ago): the rates alone let the ends of
-    /// a turn through, where the IMU's noise decides which samples pass and the estimate was
-    /// pulled off by a few tenths of a degree.
+    /// pull it slowly. A gap more than [`DRIFT_JUMP_DEG`] beyond the estimate is slip, not drift: a
+    /// collision turned the body under slipping wheels, or the counters were reset. It re-anchors
+    /// the estimate, and so does every sample for [`SLIP_HOLD`] after it (the push may go on); then
+    /// the anchor is set from the mean of the next [`SLIP_SETTLE_SAMPLES`] samples, and the
+    /// estimate follows the gap again only after that. The wheels' heading is taken at the IMU
+    /// sample's time (each encoder's count moved along at its rate), so encoders that report at
+    /// different moments open no gap while driving. No sample is taken while `turning` (the
+    /// controller drives a turn or a look, or one ended less than
+    /// [`crate::motor::SETTLE_AFTER_TURN`] ago): the rates alone let the ends of a turn through,
+    /// where the IMU's noise decides which samples pass and the estimate was pulled off by a few
+    /// tenths of a degree.
     pub fn estimate_imu_drift(&mut self, now: Instant, cfg: &CartoConfig, turning: bool) {
         if cfg.imu_drift_tau_s <= 0.0 || turning {
             return;
@@ -322,17 +324,17 @@ impl SensorState {
                 self.drift.slipping_until = Some(y.at + SLIP_HOLD);
             }
             self.drift.anchor = Some(diff - self.drift.drift_deg);
-            self.drift.settling = Some(Settling { anchors: [0.0; SLIP_SETTLE_SAMPLES], n: 0 });
+            self.drift.settling = Some(Settling { sum: 0.0, n: 0 });
             return;
         }
         if let Some(settling) = self.drift.settling.as_mut() {
-            settling.anchors[settling.n] = diff - self.drift.drift_deg;
+            settling.sum += diff - self.drift.drift_deg;
             settling.n += 1;
             if settling.n == SLIP_SETTLE_SAMPLES {
                 // the mean, not the median: the estimate then follows the mean gap, and a
                 // median differing from it (the wheels' timing spikes are one-sided) would
                 // move the estimate by that difference at every slip
-                self.drift.anchor = Some(settling.anchors.iter().sum::<f64>() / SLIP_SETTLE_SAMPLES as f64);
+                self.drift.anchor = Some(settling.sum / SLIP_SETTLE_SAMPLES as f64);
                 self.drift.settling = None;
             }
             return;

@@ -1,11 +1,11 @@
 //! A* on a 4-connected grid with the Manhattan heuristic, built for speed.
 //!
-//! Concept: a [`Grid`] holds, for every cell, the cost of *entering* it (1..=255) or 0 for
-//! blocked, and which of the moves between neighbouring cells are blocked (a thin wall on the
-//! line between two free cells: [`Grid::block_move`]). An [`AStar`] planner keeps every buffer it needs between queries (flat arrays indexed
-//! by cell id, a generation stamp instead of clearing, a reusable open list), so a query allocates
-//! only the returned [`Path`]. The grid is stored with a one-cell blocked border, so neighbour
-//! look-ups need no bounds checks.
+//! Concept: a [`Grid`] holds, for every cell, the cost of *entering* it (1..=255) or 0 for blocked,
+//! and which of the moves between neighbouring cells are blocked (a thin wall on the line between
+//! two free cells: [`Grid::block_move`]). An [`AStar`] planner keeps every buffer it needs between
+//! queries (flat arrays indexed by cell id, a generation stamp instead of clearing, a reusable open
+//! list), so a query allocates only the returned [`Path`]. The grid is stored with a one-cell
+//! blocked border, so neighbour look-ups need no bounds checks.
 //!
 //! Three open-list orders ([`TieBreak`]):
 //! - [`TieBreak::Reference`] follows the original planner (`trajectory.py`, research §1.8): a
@@ -24,9 +24,10 @@
 //!   filling the whole start–goal rectangle as `(f, row, col)` does. Optimal.
 //!
 //! Invariants: a returned [`Path`] starts at the start, ends at the goal, moves one 4-neighbour
-//! step at a time through cells of non-zero cost and never over a blocked move, and its `cost` (the sum of the entered cells'
-//! costs) is minimal (except with [`TieBreak::Original`]). The start cell itself may be blocked (it is where the robot stands). No
-//! path, a blocked goal or a cell outside the grid give `None`, never a panic.
+//! step at a time through cells of non-zero cost and never over a blocked move, and its `cost` (the
+//! sum of the entered cells' costs) is minimal (except with [`TieBreak::Original`]). The start cell
+//! itself may be blocked (it is where the robot stands). No path, a blocked goal or a cell outside
+//! the grid give `None`, never a panic.
 //!
 //! ```
 //! use cute::astar::{AStar, Grid, TieBreak};

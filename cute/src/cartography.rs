@@ -42,12 +42,12 @@
 //! a robot that cannot turn ends the sweep instead of asking the same turn until the time limit.
 //!
 //! Invariants: [`Cartographer::next_command`] returns `None` (done) only when every map cell is
-//! known, proven unreachable, or given up because no turn towards it is left (above); with
-//! every turn made, every cell reachable from the start by moves not refused has been visited.
-//! It never asks for a FORWARD into a cell the map shows as an obstacle or off the map, nor along
-//! a blocked move, nor a turn it has seen fail from the same cell and heading. Each search, bump or failed turn gains information, so the
-//! sweep always ends. The room's outer walls need not be
-//! known: cells outside the room are met as obstacles like any other.
+//! known, proven unreachable, or given up because no turn towards it is left (above); with every
+//! turn made, every cell reachable from the start by moves not refused has been visited. It never
+//! asks for a FORWARD into a cell the map shows as an obstacle or off the map, nor along a blocked
+//! move, nor a turn it has seen fail from the same cell and heading. Each search, bump or failed
+//! turn gains information, so the sweep always ends. The room's outer walls need not be known:
+//! cells outside the room are met as obstacles like any other.
 //!
 //! ```
 //! use cute::cartography::{Cartographer, MoveResult};
