@@ -445,6 +445,12 @@ impl Carto {
         self.pilot.set_known_surfaces(points);
     }
 
+    /// Every echo point the safety checks hold now, in the grid's metric frame
+    /// ([`crate::surroundings`]; the floor plan's not included).
+    pub fn echo_points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.pilot.echo_points()
+    }
+
     /// What the pilot is doing now ([`Pilot::activity`]).
     pub fn activity(&self) -> crate::pilot::Activity {
         self.pilot.activity()

@@ -319,9 +319,10 @@ pub struct Pilot {
     counters: PilotCounters,
     safety: Safety,
     surroundings: Surroundings,
-    /// Echoes heard while the robot moved (the last turn, or the last FORWARD), each kept on the
-    /// cone's edge farther from the line of the next FORWARD (`pilot/safety.rs`, "Readings in
-    /// turns", "Readings while driving"): only that FORWARD's corridor check asks them.
+    /// Echoes heard while the robot moved (in turns, looks and FORWARDs), each kept on the cone's
+    /// edge farther from the line of the FORWARD after it (`pilot/safety.rs`, "Readings in
+    /// turns", "Readings while driving", "Kept while they hold"): only the corridor checks ask
+    /// them.
     edge_echoes: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,
@@ -376,6 +377,12 @@ impl Pilot {
     /// The stored pose, if Cute sent one.
     pub fn pose(&self) -> Option<GridPose> {
         self.pose
+    }
+
+    /// Every echo point the safety checks hold now, in the grid's metric frame
+    /// ([`crate::surroundings`]): those kept at rest and those heard moving (not the floor plan).
+    pub fn echo_points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.surroundings.points().chain(self.edge_echoes.points())
     }
 
     /// What the pilot is doing now.

@@ -7,7 +7,7 @@ mod fake;
 
 use carto::CartoConfig;
 use fake::{Harness, POSE};
-use protocol::link::{Command, GuiMessage};
+use protocol::link::{Command, Direction, GuiMessage};
 
 fn cartography(command: Command) -> GuiMessage {
     GuiMessage::SendMoveCartography { command }
@@ -293,17 +293,30 @@ fn a_reading_in_a_turn_is_kept_on_the_edge_of_the_cone_away_from_the_path() {
 }
 
 #[test]
-fn echoes_heard_in_a_turn_serve_only_the_forward_after_it() {
+fn echoes_heard_in_a_turn_are_kept_past_the_next_turns() {
     // heard late in the right turn, then a left turn back to EAST and a right turn to SOUTH
-    // again with nothing heard: the second FORWARD south drives
-    let mut h = ready_with(fake::test_config());
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    turn_hearing(&mut h, Command::Right, 4.0, (75.0, 105.0));
-    h.send(cartography(Command::Left));
-    h.send(cartography(Command::Right));
-    assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
-    assert_eq!(forward_without_echo(&mut h), DROVE_SOUTH);
+    // again with nothing heard
+    let turns_after_hearing = || {
+        let mut h = ready_with(fake::test_config());
+        h.robot.distance_cm = -1.0;
+        h.run_ms(150);
+        turn_hearing(&mut h, Command::Right, 4.0, (75.0, 105.0));
+        h.send(cartography(Command::Left));
+        h.send(cartography(Command::Right));
+        assert!(h.run_until(20000, |h| h.move_done_count() == 3), "turns did not finish");
+        h
+    };
+    // "no echo" at rest clears nothing: the echo is still kept and blocks the FORWARD south
+    // (until 2026-11-26 the next turn forgot it and the robot drove)
+    assert_eq!(forward_without_echo(&mut turns_after_hearing()), BLOCKED_SOUTH);
+    // a new pose from Cute forgets it (it was placed from the old one): the robot drives
+    let mut h = turns_after_hearing();
+    h.send(GuiMessage::SendRobotPosition { x: 5, y: 6, direction: Direction::South });
+    assert!(h.run_until(1000, |h| h.reply_msgs().contains(&GuiMessage::RobotPositionReceived)));
+    assert_eq!(
+        forward_without_echo(&mut h),
+        [GuiMessage::SetRobotPosition { x: 6, y: 6 }, GuiMessage::MoveDone]
+    );
 }
 
 /// The stall watch on or off, telemetry flowing (the odometry is carried between encoder frames
@@ -432,14 +445,16 @@ fn a_post_heard_while_driving_blocks_the_next_forward() {
 }
 
 #[test]
-fn a_post_heard_while_driving_beyond_the_next_forward_does_not_block_it() {
+fn a_post_heard_while_driving_beyond_the_next_forward_blocks_the_one_after() {
     // 0.85 m from the start: 12 cm past where the second FORWARD's front face stops (0.73 m)
     let (seen, kept, third) = forwards_after_hearing(true, 0.85, 3);
     assert!(kept >= 1, "no reading kept while driving");
     assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
-    // it would lie in the third FORWARD's path, but the points serve the next FORWARD only: the
-    // second's start forgot them (and heard nothing)
-    assert_eq!(third, vec![GuiMessage::SetRobotPosition { x: 5, y: 8 }, GuiMessage::MoveDone]);
+    // it lies in the third FORWARD's path; the reading at rest before it hears nothing (the post
+    // stands beside the cone, 12 cm ahead of the sonar), but the point heard while driving is
+    // still kept ("Kept while they hold"): until 2026-11-26 the second FORWARD's start forgot it
+    // and the third drove into the post
+    assert_eq!(third, vec![GuiMessage::SetObstaclePosition { x: 5, y: 8 }, GuiMessage::MoveDone]);
 }
 
 #[test]

@@ -135,6 +135,14 @@ pub struct FirstContact {
     /// recorded).
     #[serde(default)]
     pub touched_heard: Option<Heard>,
+    /// How far from where the robot touched the nearest echo point Carto's safety checks held at
+    /// that moment lies, metres, each point placed in the world from the grid frame as Carto
+    /// placed it (from the pose it believed when it heard it). `None` when Carto held no point
+    /// (or in results written before it was recorded). Beside [`FirstContact::touched_heard`] it
+    /// tells a spot that was heard and forgotten (or cleared) from one Carto still held when it
+    /// moved into it.
+    #[serde(default)]
+    pub touched_held_m: Option<f64>,
 }
 
 /// A reported echo counts for a contact if it came from the touched shape this close to where it
@@ -462,13 +470,15 @@ impl Report {
             let belief = c.belief_error_m.map_or(String::new(), |e| format!(", Carto's belief {e:.3} m off"));
             let _ = writeln!(
                 s,
-                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief}){}{}",
+                "first contact   {:.1} s, {cell}, {}: {} ({:.3} m off the cell's centre{belief}){}{}{}",
                 c.t_s,
                 c.carto_activity,
                 c.cause.describe(),
                 c.off_centre_m,
                 c.touched.map_or(String::new(), |t| format!("; touched: {}", t.describe())),
-                c.touched_heard.map_or(String::new(), |h| format!(", {}", h.describe()))
+                c.touched_heard.map_or(String::new(), |h| format!(", {}", h.describe())),
+                c.touched_held_m
+                    .map_or(String::new(), |d| format!("; Carto's nearest echo point {d:.2} m from there"))
             );
         }
         let _ = writeln!(s, "links           out: bytes/frames/errors   in: bytes/frames/errors");

@@ -443,8 +443,17 @@ impl Lockstep {
                         None => Heard::Never,
                     }
                 }),
+                touched_held_m: start.and_then(|c| self.nearest_held_echo_m(c.at)),
             });
         }
+    }
+
+    /// How far from the world point `at` the nearest echo point Carto holds lies, metres, with
+    /// Carto's grid frame laid on the true one (`None` when it holds none).
+    fn nearest_held_echo_m(&self, at: (f32, f32)) -> Option<f64> {
+        let (ox, oy) = self.truth.frame.cell_center(0, 0);
+        let (ax, ay) = (f64::from(at.0 - ox), f64::from(at.1 - oy));
+        self.carto.carto().echo_points().map(|(x, y)| (x - ax).hypot(y - ay)).min_by(f64::total_cmp)
     }
 
     /// Runs until the mission is over (plus a short settle) or the time limit.

@@ -43,6 +43,8 @@ fn a_forward_into_a_door_jamb_the_sonar_cannot_see_is_classified_as_such() {
     assert!(report.to_text().contains("first contact"), "{}", report.to_text());
     // outside the cone from every cell the robot stood in: no echo ever came from the jamb
     assert_eq!(first.touched_heard, Some(Heard::Never), "{first:?}");
+    // and Carto held no echo point there
+    assert!(first.touched_held_m.is_none_or(|d| d > 0.10), "{first:?}");
     assert!(report.to_text().contains("never heard by the sonar"), "{}", report.to_text());
 }
 
@@ -66,6 +68,9 @@ fn a_first_contact_says_whether_the_sonar_had_heard_the_spot_before() {
     };
     assert!(first_s + 30.0 < first.t_s, "{first:?}");
     assert!(nearest_m < 1.0, "{first:?}");
+    // heard, but no longer held: Carto's nearest echo point lay well away from the spot
+    assert!(first.touched_held_m.is_some_and(|d| d > 0.10), "{first:?}");
+    assert!(run.report(1.0).to_text().contains("Carto's nearest echo point"));
 }
 
 #[test]

@@ -118,8 +118,6 @@ impl Pilot {
     }
 
     pub(super) fn start_turn(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
-        // the echoes of an earlier turn were for the FORWARD after it, on another line
-        self.edge_echoes.clear();
         self.look_pending = None;
         match motor.start_turn(now, mv == Move::Right, sensors) {
             Ok(()) => self.stage = Stage::Moving { kind: mv, since: now },

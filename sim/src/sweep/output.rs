@@ -304,7 +304,43 @@ fn first_contacts(s: &mut String, records: &[RunRecord]) {
          shape within {HEARD_NEAR_M:.2} m of where it was touched (no use of the readings could \
          have told Carto that surface was there); runs recorded before this was kept count as heard."
     );
+    heard_and_held(s, records);
     touched_first(s, records);
+}
+
+/// The "Heard, and held?" table of "First contacts": for the runs whose first touch the sonar
+/// had heard, or not, how many touched a spot where Carto still held an echo point
+/// ([`FirstContact::touched_held_m`] within [`HEARD_NEAR_M`]).
+fn heard_and_held(s: &mut String, records: &[RunRecord]) {
+    const CLASSES: [&str; 4] = [
+        "never heard there",
+        "heard there, only from farther than 1 m",
+        "heard there from 1 m or nearer",
+        "not recorded",
+    ];
+    let class = |c: &FirstContact| match c.touched_heard {
+        Some(Heard::Never) => CLASSES[0],
+        Some(Heard::Before { nearest_m, .. }) if nearest_m > 1.0 => CLASSES[1],
+        Some(Heard::Before { .. }) => CLASSES[2],
+        None => CLASSES[3],
+    };
+    let _ = writeln!(
+        s,
+        "\nHeard, and held? Whether Carto still held an echo point within {HEARD_NEAR_M:.2} m of the \
+         spot when the robot touched it (placed where Carto placed it):\n"
+    );
+    let _ = writeln!(s, "| first touch | runs | Carto held a point there | it did not |");
+    let _ = writeln!(s, "|---|---:|---:|---:|");
+    for label in CLASSES {
+        let runs: Vec<&FirstContact> =
+            records.iter().filter_map(|r| r.first_contact.as_ref()).filter(|c| class(c) == label).collect();
+        if runs.is_empty() {
+            continue;
+        }
+        let held =
+            runs.iter().filter(|c| c.touched_held_m.is_some_and(|d| d <= f64::from(HEARD_NEAR_M))).count();
+        let _ = writeln!(s, "| {label} | {} | {held} | {} |", runs.len(), runs.len() - held);
+    }
 }
 
 /// How many of `runs` first touched something the sonar had never reported an echo from.
@@ -510,7 +546,7 @@ mod tests {
             let touched = match i {
                 0 => r#","touched":{"kind":"leg","width_m":0.03},"touched_heard":"never""#,
                 1 => {
-                    r#","touched":{"kind":"leg","width_m":0.03},"touched_heard":{"before":{"first_s":0.5,"nearest_m":0.3}}"#
+                    r#","touched":{"kind":"leg","width_m":0.03},"touched_heard":{"before":{"first_s":0.5,"nearest_m":0.3}},"touched_held_m":0.04"#
                 }
                 2 => r#","touched":{"kind":"box","off_grid_deg":30.0},"touched_heard":"never""#,
                 _ => "",
@@ -557,10 +593,16 @@ mod tests {
             s.contains("| box turned past 22.5° from the grid | 1 | 0 | 1 | 0 | 1 | office room 1 seed 2 |"),
             "{s}"
         );
+        // heard and held: the furnished run's spot was heard from 0.3 m and Carto held a point
+        // 4 cm from it; the two never heard were not held
+        assert!(s.contains("| never heard there | 2 | 0 | 2 |"), "{s}");
+        assert!(s.contains("| heard there from 1 m or nearer | 1 | 1 | 0 |"), "{s}");
+        assert!(!s.contains("farther than 1 m |"), "{s}");
         let older = [line(3, "gen:office:2", Some("other"))];
         let mut s = String::new();
         first_contacts(&mut s, &older);
         assert!(s.contains("| not recorded | 1 | 0 | 0 | 1 | 0 | office room 2 seed 3 |"), "{s}");
+        assert!(s.contains("| not recorded | 1 | 0 | 1 |"), "{s}");
         // An older results.jsonl line without the field still reads; no contact, no table.
         let mut none = String::new();
         first_contacts(&mut none, &[line(0, "gen:flat:3", None)]);
