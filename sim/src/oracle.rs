@@ -41,18 +41,24 @@ pub struct KnownRoomArg {
 /// Spacing of the points along every surface, metres: under the 2 cm clearance Carto keeps.
 pub const SPACING_M: f64 = 0.01;
 
+/// The world point `(x, y)` in the metric frame of the grid `frame`, Carto's frame (see the
+/// module docs): the points given to Carto, and the world's spots compared with Carto's echo
+/// points ([`crate::report::FirstContact::touched_held_m`]).
+pub fn to_carto_frame(frame: &GridFrame, (x, y): (f64, f64)) -> (f64, f64) {
+    let (cx, cy) = frame.cell_center(0, 0);
+    (x - f64::from(cx), y - f64::from(cy))
+}
+
 /// Points at most `step_m` apart along every wall and obstacle outline of `s`, in the metric
 /// frame of the grid `frame` (see the module docs).
 pub fn surface_points(s: &Scenario, frame: &GridFrame, step_m: f64) -> Vec<(f64, f64)> {
-    let (cx, cy) = frame.cell_center(0, 0);
-    let origin = (f64::from(cx), f64::from(cy));
     let step_m = step_m.max(1e-3);
     let mut out = Vec::new();
     let mut segment = |a: (f64, f64), b: (f64, f64)| {
         let n = ((b.0 - a.0).hypot(b.1 - a.1) / step_m).ceil().max(1.0) as usize;
         for i in 0..=n {
             let t = i as f64 / n as f64;
-            out.push((a.0 + (b.0 - a.0) * t - origin.0, a.1 + (b.1 - a.1) * t - origin.1));
+            out.push(to_carto_frame(frame, (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t)));
         }
     };
     let p = |(x, y): (f32, f32)| (f64::from(x), f64::from(y));

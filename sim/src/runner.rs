@@ -451,8 +451,7 @@ impl Lockstep {
     /// How far from the world point `at` the nearest echo point Carto holds lies, metres, with
     /// Carto's grid frame laid on the true one (`None` when it holds none).
     fn nearest_held_echo_m(&self, at: (f32, f32)) -> Option<f64> {
-        let (ox, oy) = self.truth.frame.cell_center(0, 0);
-        let (ax, ay) = (f64::from(at.0 - ox), f64::from(at.1 - oy));
+        let (ax, ay) = crate::oracle::to_carto_frame(&self.truth.frame, (f64::from(at.0), f64::from(at.1)));
         self.carto.carto().echo_points().map(|(x, y)| (x - ax).hypot(y - ay)).min_by(f64::total_cmp)
     }
 
