@@ -439,10 +439,11 @@ impl Carto {
         self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
     }
 
-    /// Gives the safety checks a floor plan: points on every surface, in the grid's metric frame
-    /// (`crate::surroundings`), never forgotten.
-    pub fn set_known_surfaces(&mut self, points: Vec<(f64, f64)>) {
-        self.pilot.set_known_surfaces(points);
+    /// Gives the safety checks known surface points, in the grid's metric frame
+    /// (`crate::surroundings`), never forgotten: a floor plan, or points added as a run goes (the
+    /// twin's analyses `--known-room` and `--known-echoes`).
+    pub fn add_known_surfaces(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        self.pilot.add_known_surfaces(points);
     }
 
     /// Every echo point the safety checks hold now, in the grid's metric frame

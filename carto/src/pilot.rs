@@ -405,9 +405,9 @@ impl Pilot {
         }
     }
 
-    /// Gives the safety checks a floor plan ([`crate::Carto::set_known_surfaces`]).
-    pub fn set_known_surfaces(&mut self, points: Vec<(f64, f64)>) {
-        self.surroundings.set_fixed(points);
+    /// Gives the safety checks known surface points ([`crate::Carto::add_known_surfaces`]).
+    pub fn add_known_surfaces(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        self.surroundings.add_fixed(points);
     }
 
     /// Whether a task runs or waits.

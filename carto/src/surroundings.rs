@@ -32,7 +32,7 @@
 //! A point is an estimate: the echo may come from anywhere in the cone at that range; the
 //! central ray is the best single guess, and the margins absorb the rest.
 //!
-//! A floor plan can be given too ([`Surroundings::set_fixed`], [`crate::Carto::set_known_surfaces`]):
+//! A floor plan can be given too ([`Surroundings::add_fixed`], [`crate::Carto::add_known_surfaces`]):
 //! points on the room's surfaces, which the checks treat as echoes and which nothing clears or
 //! forgets. The twin uses it for `--known-room` runs, which take the sonar's blind spots out of
 //! the picture (README, "Perfect perception").
@@ -181,10 +181,10 @@ impl Surroundings {
         });
     }
 
-    /// Sets the points known beforehand (a floor plan in the grid's metric frame): the checks
-    /// treat them as echoes, and nothing clears them.
-    pub fn set_fixed(&mut self, points: Vec<(f64, f64)>) {
-        self.fixed = points;
+    /// Adds known points (a floor plan in the grid's metric frame, or points given as a run
+    /// goes): the checks treat them as echoes, and nothing clears them.
+    pub fn add_fixed(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        self.fixed.extend(points);
     }
 
     /// The echo points and the floor plan's.
@@ -300,7 +300,7 @@ mod tests {
         };
         let mut s = Surroundings::default();
         // a leg 30 cm ahead, 10 cm left: in the body's path, outside the turning circle
-        s.set_fixed(vec![(0.30, 0.10)]);
+        s.add_fixed([(0.30, 0.10)]);
         assert!(blocked(&s));
         assert!(s.inside_circle(robot, 0.197).is_none());
         // a reading that sees through it, the body standing on it, a new pose: it stays

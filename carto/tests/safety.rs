@@ -74,7 +74,7 @@ fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows(
     // face: inside the 22.7 cm turning circle, so the RIGHT first backs off 10 cm west. Facing
     // SOUTH, the body and its clearance reach 17 cm east: the way back ends 3.5 cm short of
     // the centre
-    h.carto.set_known_surfaces(vec![(5.0 * 0.45 + 0.135, -5.0 * 0.45)]);
+    h.carto.add_known_surfaces([(5.0 * 0.45 + 0.135, -5.0 * 0.45)]);
     let x0 = h.robot.x;
     h.send(cartography(Command::Right));
     let back = run_to_move_done_tracking(&mut h, 1, |h| x0 - h.robot.x);

@@ -62,6 +62,9 @@ pub struct RobotBody {
     /// came from, on a [`HEARD_CELL_M`] grid: when each grid cell was first heard, and the
     /// shortest range it was heard from.
     first_heard: BTreeMap<(usize, i32, i32), HeardSpot>,
+    /// The points of `first_heard` not yet taken ([`RobotBody::take_new_heard`]); `None` unless
+    /// collected ([`RobotBody::collect_new_heard`]).
+    new_heard: Option<Vec<(f32, f32)>>,
 }
 
 impl RobotBody {
@@ -85,6 +88,7 @@ impl RobotBody {
             last_rays: Vec::new(),
             dt,
             first_heard: BTreeMap::new(),
+            new_heard: None,
         }
     }
 
@@ -144,9 +148,26 @@ impl RobotBody {
         {
             let (range, (x, y)) = (hit.distance_m, ray.to);
             let key = (*part, (x / HEARD_CELL_M).round() as i32, (y / HEARD_CELL_M).round() as i32);
+            if let Some(new) = self.new_heard.as_mut()
+                && !self.first_heard.contains_key(&key)
+            {
+                new.push((x, y));
+            }
             let heard = self.first_heard.entry(key).or_insert(HeardSpot { first: now, nearest_m: range });
             heard.nearest_m = heard.nearest_m.min(range);
         }
+    }
+
+    /// From now on, keeps every point the sonar reports an echo from for the first time (one per
+    /// shape and [`HEARD_CELL_M`] cell), for [`RobotBody::take_new_heard`] (`--known-echoes`).
+    pub fn collect_new_heard(&mut self) {
+        self.new_heard.get_or_insert_with(Vec::new);
+    }
+
+    /// The points collected since the last call, world coordinates (empty unless
+    /// [`RobotBody::collect_new_heard`] was called).
+    pub fn take_new_heard(&mut self) -> Vec<(f32, f32)> {
+        self.new_heard.as_mut().map(std::mem::take).unwrap_or_default()
     }
 
     /// The echoes the sonar reported from the fixed shape `part` (the room's edges first, then

@@ -10,6 +10,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use sim::app::{ScreenshotArgs, WindowArgs};
 use sim::bench::{self, BenchArgs};
+use sim::oracle::Oracle;
 use sim::output::{self, RunArgs};
 use sim::record::Recording;
 use sim::replay::ReplayArgs;
@@ -74,8 +75,10 @@ fn main() -> ExitCode {
         .with_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()));
     tracing_subscriber::registry().with(stderr).with(sim::viz::logs::layer()).init();
     let result = match Cli::parse().command.unwrap_or(Command::Run(RunArgs::default_room())) {
-        Command::Run(args) if args.wants_window() && args.known.known_room => {
-            Err(anyhow::anyhow!("--known-room is for headless runs and sweeps, not the window"))
+        Command::Run(args) if args.wants_window() && args.known.oracle() != Oracle::None => {
+            Err(anyhow::anyhow!(
+                "--known-room and --known-echoes are for headless runs and sweeps, not the window"
+            ))
         }
         Command::Run(args) if args.wants_window() => {
             let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
@@ -187,8 +190,7 @@ fn finish_mcap(
 }
 
 fn run(args: RunArgs) -> Result<ExitCode> {
-    let loaded =
-        LoadedScenario::load_or_default(args.scenario.as_deref())?.with_known_room(args.known.known_room);
+    let loaded = LoadedScenario::load_or_default(args.scenario.as_deref())?.with_oracle(args.known.oracle());
     let out = args.out.unwrap_or_else(|| output::default_out_dir(&loaded.scenario.name));
     let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
     let (run, wall, recorder) = run_headless(loaded, args.seed, args.quiet, mcap)?;

@@ -1,14 +1,23 @@
-//! The room's surfaces as points in Carto's frame: `--known-room`, perception taken out of the
-//! picture.
+//! What an analysis run gives Carto beyond its sonar ([`Oracle`]): the room's surfaces as points
+//! in Carto's frame (`--known-room`, perception taken out of the picture), or every point the
+//! sonar has heard, where it really lies (`--known-echoes`, Carto's memory taken out of it).
 //!
 //! Carto learns the room only through one forward sonar. To tell what fails because of what the
 //! sonar cannot see from what fails for any other reason (planning, margins, localisation),
 //! `explobot run --known-room` and `explobot sweep --known-room` give Carto every surface of the
-//! room before the run ([`carto::Carto::set_known_surfaces`]): points every
+//! room before the run ([`carto::Carto::add_known_surfaces`]): points every
 //! [`SPACING_M`] along the room's walls and every obstacle's outline, in the grid's metric frame
 //! (x east, y north, cell (0, 0)'s centre at the origin). Carto's safety checks then treat them
 //! as echoes that are never cleared. Such a run is an analysis, a ceiling for perfect
 //! perception: its report says so (`known_room: true`), and it is never the robot's result.
+//!
+//! `--known-echoes` gives Carto less: during the run, every point of a surface the twin's sonar
+//! has reported an echo from (the nearest audible hit of each measurement, on a 1 cm grid), placed
+//! where it really is and never forgotten, from the step after the measurement
+//! ([`carto::Carto::add_known_surfaces`]). It asks how far a perfect memory of what the sonar
+//! heard would go: Carto itself knows an echo only as a range somewhere across a 15° cone, placed
+//! from its odometry, and forgets it (README, "Kept while they hold"). Such a run's report says
+//! `known_echoes: true`.
 //!
 //! ```
 //! use sim::scenario::Scenario;
@@ -28,7 +37,21 @@ use robot_model::grid::GridFrame;
 
 use crate::scenario::{Obstacle, Scenario};
 
-/// `--known-room`, for `explobot run` and `explobot sweep`.
+/// What a run gives Carto beyond its own sensors (module docs). Anything but [`Oracle::None`] is
+/// an analysis, never the robot's result.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum Oracle {
+    /// Nothing: what the robot achieves.
+    #[default]
+    None,
+    /// Every surface of the room, before the run (`--known-room`).
+    Room,
+    /// Every point the sonar has heard so far, where it really lies, never forgotten
+    /// (`--known-echoes`).
+    Echoes,
+}
+
+/// `--known-room` and `--known-echoes`, for `explobot run` and `explobot sweep`.
 #[derive(clap::Args, Debug, Clone, Copy, Default)]
 pub struct KnownRoomArg {
     /// Give Carto every surface of the room beforehand, as if its sonar saw everything: what
@@ -36,6 +59,22 @@ pub struct KnownRoomArg {
     /// robot's result).
     #[arg(long)]
     pub known_room: bool,
+    /// Give Carto, as the run goes, every point the sonar has heard, where it really lies, never
+    /// forgotten: what a perfect memory of the echoes would achieve (an analysis, never the
+    /// robot's result).
+    #[arg(long, conflicts_with = "known_room")]
+    pub known_echoes: bool,
+}
+
+impl KnownRoomArg {
+    /// The oracle the flags ask for.
+    pub fn oracle(&self) -> Oracle {
+        match (self.known_room, self.known_echoes) {
+            (true, _) => Oracle::Room,
+            (false, true) => Oracle::Echoes,
+            (false, false) => Oracle::None,
+        }
+    }
 }
 
 /// Spacing of the points along every surface, metres: under the 2 cm clearance Carto keeps.

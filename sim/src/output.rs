@@ -189,7 +189,7 @@ pub fn recording(run: &Lockstep) -> Result<Recording, OutputError> {
         profile_ron,
         seed: run.seed(),
         logs: run.link_logs().to_vec(),
-        known_room: loaded.known_room(),
+        oracle: loaded.oracle(),
     })
 }
 

@@ -12,11 +12,14 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+use crate::oracle::Oracle;
+
 /// The largest recording `load` reads (2 GiB − 1).
 pub const MAX_RECORDING_BYTES: u64 = (1 << 31) - 1;
 
-/// Recording format version; bumped when the layout changes (2: `known_room`).
-pub const FORMAT_VERSION: u32 = 2;
+/// Recording format version; bumped when the layout changes (2: `known_room`; 3: `oracle`, which
+/// replaced it).
+pub const FORMAT_VERSION: u32 = 3;
 
 /// Which way bytes went, seen from the endpoint that recorded them (transport's tracer type).
 pub use transport::Direction as Dir;
@@ -49,8 +52,9 @@ pub struct Recording {
     pub seed: u64,
     /// Every endpoint's traffic.
     pub logs: Vec<EndpointLog>,
-    /// Carto was given the room's surfaces (`--known-room`); a replay gives them again.
-    pub known_room: bool,
+    /// What Carto was given beyond its sensors (`--known-room`, `--known-echoes`); a replay
+    /// gives it again.
+    pub oracle: Oracle,
 }
 
 /// A recording that could not be read or written.
@@ -304,7 +308,7 @@ mod tests {
             profile_ron: "()".into(),
             seed: 3,
             logs: log(vec![(7, Dir::Written, &[0xAA])]),
-            known_room: true,
+            oracle: Oracle::Echoes,
         };
         let path = dir.join("a.rec");
         rec.save(&path).unwrap();

@@ -46,7 +46,7 @@ pub fn rebuild(rec: &Recording) -> Result<LoadedScenario, ReplayError> {
     let scenario = Scenario::from_ron_str(&rec.scenario_ron, &rec.scenario_label)?;
     let profile = RobotProfile::from_ron_str(&rec.profile_ron, "<recorded profile>")?;
     let loaded = LoadedScenario::with_profile(scenario, profile, &rec.scenario_ron, &rec.scenario_label)?;
-    Ok(loaded.with_known_room(rec.known_room))
+    Ok(loaded.with_oracle(rec.oracle))
 }
 
 /// Whether `replayed` matches the recording, and the line that says so (the endpoint count and

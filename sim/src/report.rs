@@ -250,6 +250,10 @@ pub struct Report {
     /// perfect perception, not what the robot's sensors achieve. Written only when set.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub known_room: bool,
+    /// Carto was given every point the sonar heard, where it really lies, never forgotten
+    /// (`--known-echoes`): a ceiling for a perfect memory of the echoes. Written only when set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub known_echoes: bool,
     /// Simulated time at the end, seconds.
     pub sim_time_s: f64,
     /// Wall-clock time the run took, seconds (not part of the determinism hash).
@@ -420,6 +424,13 @@ impl Report {
                  for perfect perception, not what the sonar achieves"
             );
         }
+        if self.known_echoes {
+            let _ = writeln!(
+                s,
+                "known echoes    Carto was given every point the sonar heard, where it lies (--known-echoes): \
+                 a ceiling for a perfect memory of the echoes, not what the robot achieves"
+            );
+        }
         let _ = writeln!(
             s,
             "time            {:.1} s simulated in {:.2} s wall ({:.0}x real time, {} steps)",
@@ -576,6 +587,7 @@ mod tests {
             scenario: "t".into(),
             seed: 1,
             known_room: false,
+            known_echoes: false,
             sim_time_s: 10.0,
             wall_time_s: 0.01,
             real_time_factor: 1000.0,

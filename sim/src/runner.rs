@@ -28,6 +28,7 @@ use crate::body::RobotBody;
 use crate::grid::GridFrame;
 use crate::localisation::{Localisation, carto_belief};
 use crate::mission::Operator;
+use crate::oracle::{Oracle, to_carto_frame};
 use crate::record::EndpointLog;
 use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario};
@@ -152,7 +153,7 @@ impl Lockstep {
         let dt = loaded.dt();
         let truth = loaded.truth().clone();
         let start = scenario.start;
-        let twin = Twin::new(&loaded, seed, dt);
+        let mut twin = Twin::new(&loaded, seed, dt);
         let clock = MockClock::new();
 
         let mut traces = Vec::new();
@@ -177,9 +178,13 @@ impl Lockstep {
             motor_carto,
             sensor_carto,
         );
-        if loaded.known_room() {
-            let points = crate::oracle::surface_points(scenario, &truth.frame, crate::oracle::SPACING_M);
-            carto.carto_mut().set_known_surfaces(points);
+        match loaded.oracle() {
+            Oracle::Room => {
+                let points = crate::oracle::surface_points(scenario, &truth.frame, crate::oracle::SPACING_M);
+                carto.carto_mut().add_known_surfaces(points);
+            }
+            Oracle::Echoes => twin.body_mut().collect_new_heard(),
+            Oracle::None => {}
         }
         let cute = Cute::new(CuteConfig {
             rows: truth.rows,
@@ -264,7 +269,13 @@ impl Lockstep {
             WriteBudget::UNLIMITED,
         );
 
-        // 3. Carto.
+        // 3. Carto (given what the sonar heard, with `--known-echoes`).
+        let heard = self.twin.body_mut().take_new_heard();
+        if !heard.is_empty() {
+            let frame = &self.truth.frame;
+            let points = heard.into_iter().map(|(x, y)| to_carto_frame(frame, (f64::from(x), f64::from(y))));
+            self.carto.carto_mut().add_known_surfaces(points);
+        }
         let logging = tracing::enabled!(tracing::Level::DEBUG);
         let before = logging.then(|| self.carto.carto().stats());
         self.carto.step(now);
@@ -451,7 +462,7 @@ impl Lockstep {
     /// How far from the world point `at` the nearest echo point Carto holds lies, metres, with
     /// Carto's grid frame laid on the true one (`None` when it holds none).
     fn nearest_held_echo_m(&self, at: (f32, f32)) -> Option<f64> {
-        let (ax, ay) = crate::oracle::to_carto_frame(&self.truth.frame, (f64::from(at.0), f64::from(at.1)));
+        let (ax, ay) = to_carto_frame(&self.truth.frame, (f64::from(at.0), f64::from(at.1)));
         self.carto.carto().echo_points().map(|(x, y)| (x - ax).hypot(y - ay)).min_by(f64::total_cmp)
     }
 

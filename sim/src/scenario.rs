@@ -34,6 +34,7 @@ use robot_model::time::Duration;
 use serde::{Deserialize, Serialize};
 
 use crate::grid::{GridFrame, MAX_CELLS, PlacedShape, room_extent, room_frame};
+use crate::oracle::Oracle;
 use crate::truth::RobotTruth;
 
 mod source;
@@ -297,7 +298,7 @@ pub struct LoadedScenario {
     pub label: String,
     truth: RobotTruth,
     dt: Duration,
-    known_room: bool,
+    oracle: Oracle,
 }
 
 impl Scenario {
@@ -378,16 +379,16 @@ impl Obstacle {
 }
 
 impl LoadedScenario {
-    /// With `on`, runs give Carto every surface of the room beforehand (`--known-room`,
-    /// [`crate::oracle`]): what the rest of the system does with perfect perception.
-    pub fn with_known_room(mut self, on: bool) -> LoadedScenario {
-        self.known_room = on;
+    /// Runs give Carto what `oracle` says beyond its sensors ([`crate::oracle`]): the room's
+    /// surfaces beforehand (`--known-room`), or every point the sonar heard (`--known-echoes`).
+    pub fn with_oracle(mut self, oracle: Oracle) -> LoadedScenario {
+        self.oracle = oracle;
         self
     }
 
-    /// Whether runs give Carto the room's surfaces ([`LoadedScenario::with_known_room`]).
-    pub fn known_room(&self) -> bool {
-        self.known_room
+    /// What runs give Carto beyond its sensors ([`LoadedScenario::with_oracle`]).
+    pub fn oracle(&self) -> Oracle {
+        self.oracle
     }
 
     /// The grid's placement in the world.
@@ -573,7 +574,7 @@ impl LoadedScenario {
             label: label.to_string(),
             truth,
             dt,
-            known_room: false,
+            oracle: Oracle::None,
         })
     }
 }

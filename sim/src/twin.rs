@@ -158,6 +158,11 @@ impl Twin {
         &self.body
     }
 
+    /// The robot's body, to collect what its sonar heard ([`RobotBody::collect_new_heard`]).
+    pub fn body_mut(&mut self) -> &mut RobotBody {
+        &mut self.body
+    }
+
     /// The motor board twin.
     pub fn motor_board(&self) -> &MotorBoard {
         &self.motor_board

@@ -114,9 +114,36 @@ fn a_known_room_run_says_so_in_its_report_and_is_refused_in_the_window() {
     let plain = explobot().args(["run", "scenarios/empty.ron", "--out"]).arg(&dir).output().unwrap();
     assert_eq!(plain.status.code(), Some(0));
     assert!(!std::fs::read_to_string(dir.join("report.json")).unwrap().contains("known_room"));
-    let out = explobot().args(["run", "--window", "--known-room"]).output().unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--known-room is for headless runs and sweeps"));
+    for flag in ["--known-room", "--known-echoes"] {
+        let out = explobot().args(["run", "--window", flag]).output().unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--known-room and --known-echoes are for headless runs and sweeps"), "{err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--known-echoes` (README, "Perfect memory"): the report says so, the recording replays with the
+/// echoes given again, byte for byte, and it cannot be combined with `--known-room`.
+#[test]
+fn a_known_echoes_run_says_so_replays_and_excludes_the_known_room() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-echoes-{}", std::process::id()));
+    let out = explobot()
+        .args(["run", "scenarios/measured/default.ron", "--known-echoes", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("known echoes    Carto was given every point the sonar heard"), "{text}");
+    let report = std::fs::read_to_string(dir.join("report.json")).unwrap();
+    assert!(report.contains("\"known_echoes\": true") && !report.contains("known_room"), "{report}");
+    let replayed = explobot().arg("replay").arg(dir.join("links.rec")).output().unwrap();
+    let text = String::from_utf8_lossy(&replayed.stdout);
+    assert_eq!(replayed.status.code(), Some(0), "{text}");
+    assert!(text.contains("identical"), "{text}");
+    let both = explobot().args(["run", "--known-room", "--known-echoes"]).output().unwrap();
+    assert_eq!(both.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&both.stderr).contains("cannot be used with"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -1,5 +1,6 @@
 //! The run's report, read from counters kept as the run went (nothing is decoded again).
 
+use crate::oracle::Oracle;
 use crate::record::hash_logs;
 use crate::report::{DirectionStats, LinkStats, MapScore, Report};
 use transport::TraceTotals;
@@ -24,7 +25,8 @@ impl Lockstep {
         let mut report = Report {
             scenario: scenario.name.clone(),
             seed: self.seed,
-            known_room: self.loaded.known_room(),
+            known_room: self.loaded.oracle() == Oracle::Room,
+            known_echoes: self.loaded.oracle() == Oracle::Echoes,
             sim_time_s,
             wall_time_s,
             real_time_factor: sim_time_s / wall_time_s.max(1e-9),

@@ -159,7 +159,7 @@ impl RunArgs {
         {
             return Err(SweepError::Input(format!("--timeout {t}: give a number of seconds > 0")));
         }
-        let plan = Plan::build(&self.scenarios, &self.generate, self.seeds.as_ref(), self.known.known_room)?;
+        let plan = Plan::build(&self.scenarios, &self.generate, self.seeds.as_ref(), self.known.oracle())?;
         let mine: Vec<Run> = plan.runs.iter().filter(|r| shard.contains(r.index)).copied().collect();
         let jobs =
             self.jobs.or_else(|| std::thread::available_parallelism().ok()).map_or(1, NonZeroUsize::get);

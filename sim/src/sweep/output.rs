@@ -189,6 +189,14 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
              robot achieves."
         );
     }
+    if manifest.known_echoes {
+        let _ = writeln!(
+            s,
+            "\n**Known echoes** (`--known-echoes`): Carto was given every point its sonar heard, where it \
+             really lies, never forgotten. These figures are a ceiling for a perfect memory of the echoes, \
+             not what the robot achieves."
+        );
+    }
     if records.len() != manifest.runs {
         let _ = writeln!(s, "This folder holds {} of them (one shard).", records.len());
     }

@@ -15,6 +15,7 @@ use sha2::{Digest, Sha256};
 
 use super::SweepError;
 use crate::generate::{RoomStyle, generate};
+use crate::oracle::Oracle;
 use crate::scenario::LoadedScenario;
 
 /// Seeds to run every room with: `1..10` (inclusive), `7`, or a comma list of both (`1..5,9`).
@@ -274,6 +275,9 @@ pub struct Manifest {
     /// `--known-room`: Carto was given each room's surfaces. Written only when set.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub known_room: bool,
+    /// `--known-echoes`: Carto was given every point the sonar heard. Written only when set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub known_echoes: bool,
 }
 
 /// A room in `sweep.json`.
@@ -291,18 +295,17 @@ pub struct ManifestRoom {
 pub const FORMAT: u32 = 1;
 
 impl Plan {
-    /// Loads every scenario file, generates every room and lays out the runs; with
-    /// `known_room`, every run gives Carto the room's surfaces (`--known-room`).
+    /// Loads every scenario file, generates every room and lays out the runs; every run gives
+    /// Carto what `oracle` says ([`crate::oracle`]).
     pub fn build(
         files: &[PathBuf],
         generated: &[GenerateSpec],
         seeds: Option<&Seeds>,
-        known_room: bool,
+        oracle: Oracle,
     ) -> Result<Plan, SweepError> {
         let mut rooms = Vec::new();
         for path in files {
-            let loaded =
-                LoadedScenario::load(path).map_err(SweepError::Scenario)?.with_known_room(known_room);
+            let loaded = LoadedScenario::load(path).map_err(SweepError::Scenario)?.with_oracle(oracle);
             rooms.push(Room { id: path.display().to_string(), source: Source::File(path.clone()), loaded });
         }
         for spec in generated {
@@ -311,7 +314,7 @@ impl Plan {
                 let id = format!("gen:{}:{seed}", spec.style.name());
                 let loaded = LoadedScenario::from_ron_str(&text, &id, Path::new("."))
                     .map_err(SweepError::Scenario)?
-                    .with_known_room(known_room);
+                    .with_oracle(oracle);
                 rooms.push(Room { id, source: Source::Generated { style: spec.style, seed }, loaded });
             }
         }
@@ -340,7 +343,8 @@ impl Plan {
                     sha256: hex::encode(Sha256::digest(r.loaded.text.as_bytes())),
                 })
                 .collect(),
-            known_room,
+            known_room: oracle == Oracle::Room,
+            known_echoes: oracle == Oracle::Echoes,
         };
         Ok(Plan { rooms, runs, manifest })
     }
