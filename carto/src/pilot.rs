@@ -322,7 +322,7 @@ pub struct Pilot {
     /// Echoes heard while the robot moved (in turns, looks and FORWARDs), each kept on the cone's
     /// edge farther from the line of the FORWARD after it (`pilot/safety.rs`, "Readings in
     /// turns", "Readings while driving", "Kept while they hold"): only the corridor checks ask
-    /// them.
+    /// them. The one that refuses a FORWARD is copied into `surroundings`.
     edge_echoes: Surroundings,
     /// A reading of the running scan never came.
     scan_missing: bool,

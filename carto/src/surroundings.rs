@@ -119,8 +119,13 @@ impl Surroundings {
         if !(range_m.is_finite() && range_m >= 0.0) {
             return;
         }
-        self.points
-            .push_back(Echo { at: robot.offset(mount_m + range_m, 0.0), heard_yaw_deg: robot.yaw_deg });
+        self.add_point(robot, robot.offset(mount_m + range_m, 0.0));
+    }
+
+    /// Records a point at `at`, heard from `robot` along its heading (not necessarily on its
+    /// central ray); forgets the points now far away.
+    pub fn add_point(&mut self, robot: Pose2, at: (f64, f64)) {
+        self.points.push_back(Echo { at, heard_yaw_deg: robot.yaw_deg });
         self.points.retain(|e| (e.at.0 - robot.x).hypot(e.at.1 - robot.y) <= FORGET_BEYOND_M);
         while self.points.len() > MAX_POINTS {
             self.points.pop_front();

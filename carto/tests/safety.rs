@@ -389,17 +389,18 @@ fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
 /// farther back). The replies to the second FORWARD, and how many readings Carto kept while
 /// driving.
 fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMessage>, u64) {
-    let (replies, kept, _) = forwards_after_hearing(drive_readings, post_m, 2);
+    let (replies, kept, _, _) = forwards_after_hearing(drive_readings, post_m, 2);
     (replies, kept)
 }
 
 /// [`second_forward_after_hearing`] with `forwards` FORWARDs in all (2 or 3): the replies to
-/// the second, how many readings were kept, and the replies to the third (empty for two).
+/// the second, how many readings were kept, the replies to the third (empty for two), and the
+/// harness after the last.
 fn forwards_after_hearing(
     drive_readings: bool,
     post_m: f64,
     forwards: u8,
-) -> (Vec<GuiMessage>, u64, Vec<GuiMessage>) {
+) -> (Vec<GuiMessage>, u64, Vec<GuiMessage>, Harness) {
     let mut h = ready_with(CartoConfig { drive_readings, ..fake::test_config() });
     h.robot.send_telemetry = true;
     h.robot.distance_cm = -1.0;
@@ -427,7 +428,8 @@ fn forwards_after_hearing(
         assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the third FORWARD");
         third = h.reply_msgs();
     }
-    (second, h.carto.stats().drive_readings, third)
+    let kept = h.carto.stats().drive_readings;
+    (second, kept, third, h)
 }
 
 #[test]
@@ -445,9 +447,28 @@ fn a_post_heard_while_driving_blocks_the_next_forward() {
 }
 
 #[test]
+fn a_post_heard_while_driving_that_refused_a_forward_is_cleared_by_the_turn_after_it() {
+    // the post 14 cm ahead of the second cell's centre (0.30 m cells): it refuses the second
+    // FORWARD, and it lies inside the circle the body sweeps turning there (19.7 cm with the
+    // clearance). The
+    // turn check does not ask the echoes heard moving, but the one that refused a FORWARD is
+    // kept as if heard at rest (`pilot/safety.rs`, "Kept while they hold"): the turn backs off
+    // first
+    let (seen, _, _, mut h) = forwards_after_hearing(true, 0.44, 2);
+    assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+    h.replies.clear();
+    let x0 = h.robot.x;
+    h.send(cartography(Command::Right));
+    let back = run_to_move_done_tracking(&mut h, 1, |h| x0 - h.robot.x);
+    let stats = h.carto.stats();
+    assert_eq!((stats.turns_shifted, stats.turns_refused), (1, 0));
+    assert!(back >= 0.02, "backed off {back:.3} m");
+}
+
+#[test]
 fn a_post_heard_while_driving_beyond_the_next_forward_blocks_the_one_after() {
     // 0.85 m from the start: 12 cm past where the second FORWARD's front face stops (0.73 m)
-    let (seen, kept, third) = forwards_after_hearing(true, 0.85, 3);
+    let (seen, kept, third, _) = forwards_after_hearing(true, 0.85, 3);
     assert!(kept >= 1, "no reading kept while driving");
     assert_eq!(seen, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
     // it lies in the third FORWARD's path; the reading at rest before it hears nothing (the post

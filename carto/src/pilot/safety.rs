@@ -65,7 +65,7 @@
 //!   where the robot was), [`FAR_SIGMAS`] sonar σ beyond its range, so it blocks that FORWARD
 //!   only when the whole arc lies in the body's path. These points feed only the corridor
 //!   check, never the turn check: a turn would shift away from an echo whose position is this
-//!   uncertain. Readings at rest clear them as they clear the others. Measured in the README
+//!   uncertain (but for the one that refuses a FORWARD, "Kept while they hold"). Readings at rest clear them as they clear the others. Measured in the README
 //!   ("Safety checks"): on central rays, or over wider windows, they blocked moves that were
 //!   free.
 //!
@@ -108,7 +108,12 @@
 //!   sonar had heard from 1 m or nearer, Carto held a point within 10 cm of it in 6 (README,
 //!   "Had the sonar heard it?"). Kept, 12 of the 200 rooms pass instead of 9 and collisions fall
 //!   by 5 %; asked by the turn check too, collisions fell by 9 % more but coverage by 0.7 points
-//!   and one more room failed, so the turn check still does not ask them.
+//!   and one more room failed, so the turn check still does not ask them. One exception: the
+//!   point that refuses a FORWARD is kept from then on as if heard at rest, so the turn Cute
+//!   asks for next (it usually turns away from a refused cell) clears it too. Carto has just
+//!   acted on that point; the turn ignored it, and in generated irregular seed 3 turned into
+//!   the box that had refused the FORWARD 0.4 s earlier. On the 200 generated rooms:
+//!   collisions 2,515 → 2,428, the same 12 pass, coverage 86.8 → 86.6 %.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
@@ -598,9 +603,14 @@ impl Pilot {
             let to = s.cell_m - along + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
             let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
-            if let Some((a, l)) =
-                known.or_else(|| self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half))
-            {
+            let heard_moving =
+                if known.is_none() { self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half) } else { None };
+            if let Some((a, l)) = heard_moving {
+                // what refused this FORWARD, the turn that may follow clears too ("Kept while
+                // they hold")
+                self.surroundings.add_point(robot, robot.offset(a, l));
+            }
+            if let Some((a, l)) = known.or(heard_moving) {
                 tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
                 self.counters.corridor_blocked += 1;
                 self.report_obstacle();
