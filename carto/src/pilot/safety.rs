@@ -603,8 +603,11 @@ impl Pilot {
             let to = s.cell_m - along + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
             let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
-            let heard_moving =
-                if known.is_none() { self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half) } else { None };
+            let heard_moving = if known.is_none() {
+                self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half)
+            } else {
+                None
+            };
             if let Some((a, l)) = heard_moving {
                 // what refused this FORWARD, the turn that may follow clears too ("Kept while
                 // they hold")
