@@ -122,8 +122,9 @@ impl Surroundings {
         self.add_point(robot, robot.offset(mount_m + range_m, 0.0));
     }
 
-    /// Records a point at `at`, heard from `robot` along its heading (not necessarily on its
-    /// central ray); forgets the points now far away.
+    /// Records a point at `at`, kept as if heard along `robot`'s heading (which decides the
+    /// readings that may clear it, [`CLEARS_HEARD_WITHIN_DEG`]); forgets the points now far
+    /// away.
     pub fn add_point(&mut self, robot: Pose2, at: (f64, f64)) {
         self.points.push_back(Echo { at, heard_yaw_deg: robot.yaw_deg });
         self.points.retain(|e| (e.at.0 - robot.x).hypot(e.at.1 - robot.y) <= FORGET_BEYOND_M);

@@ -447,15 +447,23 @@ fn a_post_heard_while_driving_blocks_the_next_forward() {
 }
 
 #[test]
-fn a_post_heard_while_driving_that_refused_a_forward_is_cleared_by_the_turn_after_it() {
-    // the post 14 cm ahead of the second cell's centre (0.30 m cells): it refuses the second
-    // FORWARD, and it lies inside the circle the body sweeps turning there (19.7 cm with the
-    // clearance). The
-    // turn check does not ask the echoes heard moving, but the one that refused a FORWARD is
-    // kept as if heard at rest (`pilot/safety.rs`, "Kept while they hold"): the turn backs off
-    // first
+fn a_post_heard_while_driving_that_refused_a_forward_is_avoided_by_the_turn_after_it() {
+    // The post stands 14 cm ahead of the second cell's centre (0.30 m cells): it refuses the
+    // second FORWARD and lies inside the circle the body sweeps turning there (19.7 cm with the
+    // clearance). The turn check does not ask the echoes heard moving, but the one that refused
+    // a FORWARD is kept as if heard at rest (`pilot/safety.rs`, "Kept while they hold"), so the
+    // turn backs off first.
     let (seen, _, _, mut h) = forwards_after_hearing(true, 0.44, 2);
     assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
+    // the copy lies exactly where the echo heard moving lay, 13-19 cm ahead of the centre of
+    // the robot's cell (5, 6) (x = 6 x 0.30 m, facing east)
+    let points: Vec<(f64, f64)> = h.carto.echo_points().collect();
+    let copied = points
+        .iter()
+        .enumerate()
+        .find(|(i, p)| points[i + 1..].iter().any(|q| (p.0 - q.0).hypot(p.1 - q.1) < 1e-9));
+    let (_, at) = copied.expect("the refusing echo is held twice: heard moving, and kept as if at rest");
+    assert!((0.13..=0.19).contains(&(at.0 - 1.8)), "{at:?}");
     h.replies.clear();
     let x0 = h.robot.x;
     h.send(cartography(Command::Right));

@@ -64,8 +64,9 @@
 //!   is kept on the cone's edge farther from the next FORWARD's line (the heading's line through
 //!   where the robot was), [`FAR_SIGMAS`] sonar σ beyond its range, so it blocks that FORWARD
 //!   only when the whole arc lies in the body's path. These points feed only the corridor
-//!   check, never the turn check: a turn would shift away from an echo whose position is this
-//!   uncertain (but for the one that refuses a FORWARD, "Kept while they hold"). Readings at rest clear them as they clear the others. Measured in the README
+//!   check, never the turn check (but for the one that refuses a FORWARD, "Kept while they
+//!   hold"): a turn would shift away from an echo whose position is this uncertain. Readings at
+//!   rest clear them as they clear the others. Measured in the README
 //!   ("Safety checks"): on central rays, or over wider windows, they blocked moves that were
 //!   free.
 //!
@@ -110,9 +111,9 @@
 //!   by 5 %; asked by the turn check too, collisions fell by 9 % more but coverage by 0.7 points
 //!   and one more room failed, so the turn check still does not ask them. One exception: the
 //!   point that refuses a FORWARD is kept from then on as if heard at rest, so the turn Cute
-//!   asks for next (it usually turns away from a refused cell) clears it too. Carto has just
-//!   acted on that point; the turn ignored it, and in generated irregular seed 3 turned into
-//!   the box that had refused the FORWARD 0.4 s earlier. On the 200 generated rooms:
+//!   asks for next (it usually turns away from a refused cell) keeps clear of it too. Carto has
+//!   just acted on that point; before this the turn ignored it, and in generated irregular
+//!   seed 3 turned into the box that had refused the FORWARD 0.4 s earlier. On the 200 generated rooms:
 //!   collisions 2,515 → 2,428, the same 12 pass, coverage 86.8 → 86.6 %.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
@@ -609,8 +610,8 @@ impl Pilot {
                 None
             };
             if let Some((a, l)) = heard_moving {
-                // what refused this FORWARD, the turn that may follow clears too ("Kept while
-                // they hold")
+                // what refused this FORWARD, the turn that may follow keeps clear of too ("Kept
+                // while they hold")
                 self.surroundings.add_point(robot, robot.offset(a, l));
             }
             if let Some((a, l)) = known.or(heard_moving) {
