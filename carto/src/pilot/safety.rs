@@ -113,8 +113,8 @@
 //!   point that refuses a FORWARD is kept from then on as if heard at rest, so the turn Cute
 //!   asks for next (it usually turns away from a refused cell) keeps clear of it too. Carto has
 //!   just acted on that point; before this the turn ignored it, and in generated irregular
-//!   seed 3 turned into the box that had refused the FORWARD 0.4 s earlier. On the 200 generated rooms:
-//!   collisions 2,515 → 2,428, the same 12 pass, coverage 86.8 → 86.6 %.
+//!   seed 3 turned into the box that had refused the FORWARD 0.4 s earlier. On the 200
+//!   generated rooms: collisions 2,515 → 2,428, the same 12 pass, coverage 86.8 → 86.6 %.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
