@@ -88,6 +88,11 @@ pub struct CartoStats {
     pub drive_readings: u64,
     /// FORWARDs stopped because the range held while the wheels drove.
     pub stalls: u64,
+    /// FORWARDs stopped because the IMU saw the body turned under its wheels.
+    pub pushes: u64,
+    /// Jumps of the gap between the IMU's and the wheels' headings (slip, or a push), each of
+    /// which re-anchored the IMU drift estimate ([`crate::sensors::SensorState::estimate_imu_drift`]).
+    pub heading_jumps: u64,
     /// Times the sensor board was declared lost.
     pub peer_lost_events: u64,
     /// Drive frames sent to the motor board.
@@ -491,6 +496,8 @@ impl Carto {
             turn_readings: p.turn_readings,
             drive_readings: p.drive_readings,
             stalls: p.stalls,
+            pushes: p.pushes,
+            heading_jumps: self.sensors.imu_drift_jumps(),
             wall_fixes: p.wall_fixes,
             ..self.stats
         }

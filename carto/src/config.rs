@@ -69,6 +69,11 @@ pub struct CartoConfig {
     /// body is stuck and the wheels slip; Carto stops, corrects its position by the sonar, answers
     /// `SET_OBSTACLE_POSITION` and drives back (`pilot/stall.rs`).
     pub stall_watch: bool,
+    /// Watch the heading while a FORWARD runs: when the gap between the IMU's and the wheels'
+    /// headings jumps by more than [`crate::sensors::PUSH_JUMP_DEG`], something the body touches
+    /// turned it under its wheels; Carto stops, answers `SET_OBSTACLE_POSITION` and drives back,
+    /// as after the bumper (`pilot.rs`, "Pushed").
+    pub push_watch: bool,
     /// How long before a distance frame arrives its reading was measured, on average: half the
     /// HC-SR04's measuring cycle (the board sends the latest result). Places readings taken in
     /// turns.
@@ -219,6 +224,7 @@ impl Default for CartoConfig {
             drive_readings: true,
             look_past_turn_deg: 20.0,
             stall_watch: true,
+            push_watch: true,
             sonar_lag: Duration::from_millis(30),
             body_length_m: 0.26,
             body_width_m: 0.24,

@@ -46,6 +46,13 @@ pub const DRIFT_JUMP_DEG: f64 = 2.0;
 /// may go on), so the part of it below [`DRIFT_JUMP_DEG`] does not become drift either.
 pub const SLIP_HOLD: Duration = Duration::from_millis(2000);
 
+/// A jump of the gap between the IMU's and the wheels' headings larger than this, beyond the
+/// drift estimate, is a push: something the body touches turned it under its wheels, degrees.
+/// A FORWARD that sees one stops ([`CartoConfig::push_watch`], `pilot.rs`). It is larger than
+/// [`DRIFT_JUMP_DEG`]: on `lossy-motor` (seed 10), whose motor link loses frames, a FORWARD that
+/// touched nothing opened a 2.8° gap, and a 2° threshold stopped it (the map missed a cell).
+pub const PUSH_JUMP_DEG: f64 = 3.0;
+
 /// After a slip the new anchor is the mean of this many samples taken once the hold is over,
 /// not the last sample of the hold: one IMU sample carries its 0.2° noise and the wheels' heading
 /// its encoder timing (spikes of up to 1.5°), and a whole run's drift estimate used to lose
@@ -141,9 +148,23 @@ struct DriftEstimate {
     slipping_until: Option<Instant>,
     /// Jumps taken for slip so far.
     jumps: u64,
+    /// Of those, jumps larger than [`PUSH_JUMP_DEG`].
+    pushes: u64,
+    /// Samples taken so far.
+    samples: u64,
     /// After a slip, the (IMU − wheel − drift) of the samples since the hold ended; the anchor
     /// is their mean once there are [`SLIP_SETTLE_SAMPLES`]. `None`: not settling.
     settling: Option<Settling>,
+}
+
+/// Counts of the drift estimate's samples, for the push watch of a FORWARD
+/// ([`SensorState::heading_jumps`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct HeadingJumps {
+    /// Samples taken.
+    pub samples: u64,
+    /// Of those, jumps larger than [`PUSH_JUMP_DEG`].
+    pub pushes: u64,
 }
 
 /// The samples gathered for a new anchor after a slip (see [`SLIP_SETTLE_SAMPLES`]): their sum
@@ -240,6 +261,12 @@ impl SensorState {
         self.drift.jumps
     }
 
+    /// How many samples the drift estimate has taken, and how many of them jumped by more than
+    /// [`PUSH_JUMP_DEG`] (see [`Self::estimate_imu_drift`]).
+    pub fn heading_jumps(&self) -> HeadingJumps {
+        HeadingJumps { samples: self.drift.samples, pushes: self.drift.pushes }
+    }
+
     /// The IMU drift currently removed from its readings, degrees counter-clockwise.
     pub fn imu_drift_deg(&self) -> f64 {
         self.drift.drift_deg
@@ -311,15 +338,20 @@ impl SensorState {
         let diff = y.value - wheel;
         let dt = self.drift.last.map_or(0.0, |t| (y.at - t).as_secs_f64().min(1.0));
         self.drift.last = Some(y.at);
+        self.drift.samples += 1;
         let Some(anchor) = self.drift.anchor else {
             self.drift.anchor = Some(diff - self.drift.drift_deg);
             return;
         };
         let seen = diff - anchor;
         let slipping = self.drift.slipping_until.is_some_and(|until| y.at < until);
-        if slipping || (seen - self.drift.drift_deg).abs() > DRIFT_JUMP_DEG {
+        let jump = (seen - self.drift.drift_deg).abs();
+        if slipping || jump > DRIFT_JUMP_DEG {
             if !slipping {
                 self.drift.jumps += 1;
+                if jump > PUSH_JUMP_DEG {
+                    self.drift.pushes += 1;
+                }
                 tracing::warn!(seen, "imu and wheel headings jumped apart: drift estimate re-anchored");
                 self.drift.slipping_until = Some(y.at + SLIP_HOLD);
             }

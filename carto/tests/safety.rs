@@ -383,6 +383,85 @@ fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
     assert!(h.robot.x.abs() <= 0.03, "the body ended {:.3} m from the centre", h.robot.x);
 }
 
+/// One FORWARD east from the start cell's centre with the push watch on or off and telemetry
+/// flowing. Once the body has driven 5 cm, something it touches turns it `nudge_deg`
+/// counter-clockwise at once: the IMU sees it, the wheels do not. Runs until the MOVE_DONE.
+fn forward_nudged(nudge_deg: f64, watch: bool) -> Harness {
+    let mut h = ready_with(CartoConfig { push_watch: watch, ..fake::test_config() });
+    h.robot.send_telemetry = true;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    let mut nudged = false;
+    for _ in 0..12_000 {
+        if h.move_done_count() == 1 {
+            break;
+        }
+        if !nudged && h.robot.x >= 0.05 {
+            h.robot.yaw += nudge_deg.to_radians();
+            nudged = true;
+        }
+        h.tick();
+    }
+    assert!(nudged, "the body never drove 5 cm");
+    assert_eq!(h.move_done_count(), 1, "no MOVE_DONE");
+    h
+}
+
+#[test]
+fn a_forward_whose_body_is_turned_under_its_wheels_is_stopped_and_reported() {
+    let h = forward_nudged(6.0, true);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!((h.carto.stats().pushes, h.carto.stats().heading_jumps), (1, 1));
+    assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)), "the stored cell moved");
+    // stopped within a few centimetres of the push and driven back towards the centre
+    assert!(h.robot.x < 0.05, "the body ended {:.3} m along", h.robot.x);
+    // control: without the watch the same push is seen (a jump of the gap) and driven through
+    let h = forward_nudged(6.0, false);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!((h.carto.stats().pushes, h.carto.stats().heading_jumps), (0, 1));
+}
+
+#[test]
+fn a_jump_of_the_heading_gap_below_the_push_threshold_does_not_stop_a_forward() {
+    // 2.5 degrees: more than the drift estimate's 2 degree jump, less than a push's 3
+    let h = forward_nudged(2.5, true);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!((h.carto.stats().pushes, h.carto.stats().heading_jumps), (0, 1));
+}
+
+#[test]
+fn a_heading_gap_left_by_the_turn_before_is_not_taken_for_a_push() {
+    let mut h = ready_with(fake::test_config());
+    h.robot.send_telemetry = true;
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    // halfway through a LEFT, something turns the body 6 degrees on; the turn ends on the IMU's
+    // heading, so the wheels have turned 6 degrees less: a gap the drift estimate, which takes
+    // no samples in turns, sees only after it
+    h.send(cartography(Command::Left));
+    let mut nudged = false;
+    assert!(
+        h.run_until(8000, |h| {
+            if !nudged && h.robot.yaw.to_degrees() >= 45.0 {
+                nudged = true;
+            }
+            nudged
+        }),
+        "the turn never got halfway"
+    );
+    h.robot.yaw += 6f64.to_radians();
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the turn");
+    h.send(cartography(Command::Forward));
+    let (x0, y0) = (h.robot.x, h.robot.y);
+    assert!(h.run_until(8000, |h| h.distance_from(x0, y0) > 0.002), "the FORWARD never drove");
+    // the jump had not been seen when the FORWARD started
+    assert_eq!(h.carto.stats().heading_jumps, 0);
+    assert!(h.run_until(12_000, |h| h.move_done_count() == 2), "no MOVE_DONE for the FORWARD");
+    assert_eq!(h.reply_msgs()[1..], [GuiMessage::SetRobotPosition { x: 4, y: 5 }, GuiMessage::MoveDone]);
+    // seen during the FORWARD, at its first sample, and excused
+    assert_eq!((h.carto.stats().pushes, h.carto.stats().heading_jumps), (0, 1));
+}
+
 /// Two FORWARDs east from the start cell's centre, with readings while driving on or off. While
 /// the first FORWARD has driven 2–20 cm the sonar hears a post `post_m` ahead of the start
 /// cell's centre (at rest, before and after, it reads no echo: a leg the cone holds only from

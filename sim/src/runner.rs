@@ -282,7 +282,10 @@ impl Lockstep {
         if let Some(before) = before {
             let after = self.carto.carto().stats();
             if after.stalls != before.stalls {
-                self.note_stall(now);
+                self.note_stop(now, "Carto stopped a stalled FORWARD");
+            }
+            if after.pushes != before.pushes {
+                self.note_stop(now, "Carto stopped a FORWARD: the IMU saw the body turned under its wheels");
             }
             if after.obstacles != before.obstacles {
                 self.note_obstacle_report(now);
@@ -345,9 +348,11 @@ impl Lockstep {
         !self.is_finished()
     }
 
-    /// A debug line when Carto stops a FORWARD as stalled (`carto/src/pilot/stall.rs`): where the
-    /// robot really is and how far from it Carto's belief, corrected by the sonar, now lies.
-    fn note_stall(&self, now: Instant) {
+    /// A debug line when Carto stops a FORWARD as stalled (`carto/src/pilot/stall.rs`) or pushed
+    /// (`carto/src/pilot.rs`, "Pushed"): where the robot really is, how far from it Carto's
+    /// belief now lies, and how many collisions the run has had (a push with none new is a
+    /// false alarm).
+    fn note_stop(&self, now: Instant, what: &str) {
         let p = self.twin.body().pose();
         let believed = self.carto.carto().believed_pose();
         let belief_error_m = believed
@@ -361,7 +366,8 @@ impl Lockstep {
             ?belief_error_m,
             true_along_m = along.map(|a| a.0),
             carto_along_m = along.map(|a| a.1),
-            "Carto stopped a stalled FORWARD"
+            collisions = self.twin.body().world().collisions(),
+            "{what}"
         );
     }
 
