@@ -93,6 +93,9 @@ pub struct CartoStats {
     /// Jumps of the gap between the IMU's and the wheels' headings (slip, or a push), each of
     /// which re-anchored the IMU drift estimate ([`crate::sensors::SensorState::estimate_imu_drift`]).
     pub heading_jumps: u64,
+    /// Of those, jumps larger than [`crate::sensors::PUSH_JUMP_DEG`], whether or not a FORWARD's
+    /// push watch acted on them.
+    pub push_jumps: u64,
     /// Times the sensor board was declared lost.
     pub peer_lost_events: u64,
     /// Drive frames sent to the motor board.
@@ -498,6 +501,7 @@ impl Carto {
             stalls: p.stalls,
             pushes: p.pushes,
             heading_jumps: self.sensors.imu_drift_jumps(),
+            push_jumps: self.sensors.drift_counts().pushes,
             wall_fixes: p.wall_fixes,
             ..self.stats
         }

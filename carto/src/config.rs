@@ -72,7 +72,8 @@ pub struct CartoConfig {
     /// Watch the heading while a FORWARD runs: when the gap between the IMU's and the wheels'
     /// headings jumps by more than [`crate::sensors::PUSH_JUMP_DEG`], something the body touches
     /// turned it under its wheels; Carto stops, answers `SET_OBSTACLE_POSITION` and drives back,
-    /// as after the bumper (`pilot.rs`, "Pushed").
+    /// as after the bumper (`pilot.rs`, "Pushed"). It watches the IMU drift estimate's jumps, so it
+    /// is off too when the estimate is (`imu_drift_tau_s` 0).
     pub push_watch: bool,
     /// How long before a distance frame arrives its reading was measured, on average: half the
     /// HC-SR04's measuring cycle (the board sends the latest result). Places readings taken in

@@ -39,12 +39,10 @@
 //!   ([`CartoConfig::push_watch`]). It ends as after the bumper. The first sample of the drift
 //!   estimate after the FORWARD starts does not count: the estimate takes no samples in a turn
 //!   and the 0.5 s after it, and a FORWARD often starts within them, so that sample still holds
-//!   what the turn before did. Before this the robot drove on, sliding along what it touched:
-//!   in generated flat seed 5 one such FORWARD and the one after it left Carto's belief 31 cm
-//!   off, and the rest of the run was lost. On the 200 generated rooms: collisions 2,428 →
-//!   2,157, mean coverage 86.6 → 88.6 %, accuracy 93.3 → 94.7 %, Cute's final cell right in
-//!   160 → 171 runs; the same 12 pass (a push comes after a touch), and no run of the 12
-//!   scenarios, the measured rooms or the hall over their seeds changes a byte (README, "Safety
+//!   what the turn before did. What the watch misses is listed at
+//!   [`crate::sensors::PUSH_JUMP_DEG`]. Before this the robot drove on, sliding along what it
+//!   touched: in generated flat seed 5 one such FORWARD and the one after it left Carto's
+//!   belief 31 cm off, and the rest of the run was lost. Measured in the README ("Safety
 //!   checks", "Pushed").
 //!
 //! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP, a disconnect or a lost
@@ -74,7 +72,7 @@ use robot_model::time::{Duration, Instant};
 use crate::CartoConfig;
 use crate::motor::Motor;
 use crate::odometry::CellOffset;
-use crate::sensors::{HeadingJumps, SensorState};
+use crate::sensors::{DriftCounts, SensorState};
 use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
 use crate::walls::Walls;
@@ -263,7 +261,7 @@ pub enum Activity {
     DrivingForward,
     /// A turn runs.
     Turning,
-    /// Driving back after the bumper or a stalled FORWARD.
+    /// Driving back after the bumper, a stalled FORWARD or a pushed one.
     BackingOff,
     /// Turning to one look of the sonar scan, or back.
     ScanLook,
@@ -307,7 +305,7 @@ impl Activity {
             Activity::CheckingAhead => "checking the distance ahead",
             Activity::DrivingForward => "driving forward",
             Activity::Turning => "turning",
-            Activity::BackingOff => "backing off after the bumper or a stall",
+            Activity::BackingOff => "backing off after the bumper, a stall or a push",
             Activity::ScanLook => "turning to look (scan)",
             Activity::ScanReading => "reading the sonar (scan)",
             Activity::ShiftingBeforeTurn => "shifting before a turn",
@@ -352,7 +350,8 @@ pub struct Pilot {
     stall_watch: Option<StallWatch>,
     /// The push watch of the FORWARD running: the drift estimate's counts when it started
     /// (module docs, "Pushed"); `None` when the watch is off.
-    push_watch: Option<HeadingJumps>,
+    push_watch: Option<DriftCounts>,
+    /// [`CartoConfig::push_watch`].
     push_watch_on: bool,
     /// When the last reading taken while a FORWARD drove arrived.
     last_drive_reading: Option<Instant>,
@@ -729,7 +728,7 @@ impl Pilot {
                         self.bumped(now, motor, sensors);
                         continue;
                     }
-                    if kind == Move::Forward && motor.is_busy() && self.pushed_since_start(sensors) {
+                    if kind == Move::Forward && motor.is_busy() && self.poll_push_watch(sensors) {
                         self.pushed(now, motor, sensors);
                         continue;
                     }
@@ -855,7 +854,7 @@ impl Pilot {
                     None if motor.is_busy() => return,
                     None | Some(Ok(())) => self.end_task(now),
                     Some(Err(e)) => {
-                        tracing::warn!(error = %e, "back-off after the bumper or a stall failed");
+                        tracing::warn!(error = %e, "back-off after the bumper, a stall or a push failed");
                         self.end_task(now);
                     }
                 },
@@ -910,20 +909,19 @@ impl Pilot {
 
     fn bumped(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
         motor.stop(now);
-        self.edge_echoes.clear();
         self.counters.bumps += 1;
         tracing::warn!(travelled_m = ?motor.travelled_m(sensors), "bumper pressed during FORWARD: stopped");
-        self.report_obstacle();
-        self.back_off_or_end(now, motor, sensors);
+        self.end_stopped_forward(now, motor, sensors);
     }
 
-    /// Whether the drift estimate saw a push since the FORWARD started, its first sample after
-    /// the start left out (module docs, "Pushed").
-    fn pushed_since_start(&mut self, sensors: &SensorState) -> bool {
+    /// Feeds the push watch the drift estimate's counts now: the first sample after the FORWARD
+    /// started becomes its baseline, and it fires when a later one jumped by more than
+    /// [`crate::sensors::PUSH_JUMP_DEG`] (module docs, "Pushed"). Whether it fired.
+    fn poll_push_watch(&mut self, sensors: &SensorState) -> bool {
         let Some(start) = self.push_watch.as_mut() else {
             return false;
         };
-        let now = sensors.heading_jumps();
+        let now = sensors.drift_counts();
         if now.samples <= start.samples + 1 {
             // that sample still holds what the turn before did
             start.pushes = now.pushes;
@@ -936,13 +934,19 @@ impl Pilot {
     /// bumper (module docs, "Pushed").
     fn pushed(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
         motor.stop(now);
-        // placed from odometry that did not see the push
-        self.edge_echoes.clear();
         self.counters.pushes += 1;
         tracing::warn!(
             travelled_m = ?motor.travelled_m(sensors),
             "the IMU saw the body turned under its wheels during a FORWARD: stopped"
         );
+        self.end_stopped_forward(now, motor, sensors);
+    }
+
+    /// Ends a FORWARD stopped short (the bumper, a stall, a push): the echoes heard while it
+    /// drove are forgotten (placed from odometry that did not see what stopped it), the cell
+    /// ahead is reported blocked, and the robot drives back (by default) before `MOVE_DONE`.
+    fn end_stopped_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+        self.edge_echoes.clear();
         self.report_obstacle();
         self.back_off_or_end(now, motor, sensors);
     }
@@ -991,8 +995,6 @@ impl Pilot {
     /// body went, report the cell ahead as blocked and drive back, as after the bumper.
     fn stalled(&mut self, now: Instant, stall: Stall, motor: &mut Motor, sensors: &SensorState) {
         motor.stop(now);
-        // placed from the odometry that was slipping
-        self.edge_echoes.clear();
         self.counters.stalls += 1;
         tracing::warn!(
             driven_m = stall.driven_m,
@@ -1003,8 +1005,7 @@ impl Pilot {
         // the sonar put the body
         let now_m = motor.cell_offset(now, sensors).along_m;
         motor.correct_along(self.forward_from_m + stall.driven_m - now_m);
-        self.report_obstacle();
-        self.back_off_or_end(now, motor, sensors);
+        self.end_stopped_forward(now, motor, sensors);
     }
 
     /// After a FORWARD stopped short: drive back to the cell it started from (by default), then

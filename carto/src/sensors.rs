@@ -48,7 +48,15 @@ pub const SLIP_HOLD: Duration = Duration::from_millis(2000);
 
 /// A jump of the gap between the IMU's and the wheels' headings larger than this, beyond the
 /// drift estimate, is a push: something the body touches turned it under its wheels, degrees.
-/// A FORWARD that sees one stops ([`CartoConfig::push_watch`], `pilot.rs`). It is larger than
+/// A FORWARD that sees one stops ([`CartoConfig::push_watch`], `pilot.rs`, "Pushed").
+///
+/// A jump is what [`SensorState::estimate_imu_drift`] calls one: one of its samples (the IMU
+/// reports at 10 Hz; no sample is taken in a turn, nor while either heading turns faster than
+/// 3°/s) whose gap lies more than [`DRIFT_JUMP_DEG`] beyond the estimate, not within
+/// [`SLIP_HOLD`] of an earlier jump. So a push is missed when the gap grows past 2° before it
+/// passes 3° (a slow push), within 2 s of an earlier jump, or on the one sample the watch
+/// excuses; and an encoder or telemetry frame damaged past its checksum can open a gap without
+/// any touch (the FORWARD then stops and reports a free cell blocked). The threshold is above
 /// [`DRIFT_JUMP_DEG`]: on `lossy-motor` (seed 10), whose motor link loses frames, a FORWARD that
 /// touched nothing opened a 2.8° gap, and a 2° threshold stopped it (the map missed a cell).
 pub const PUSH_JUMP_DEG: f64 = 3.0;
@@ -158,9 +166,9 @@ struct DriftEstimate {
 }
 
 /// Counts of the drift estimate's samples, for the push watch of a FORWARD
-/// ([`SensorState::heading_jumps`]).
+/// ([`SensorState::drift_counts`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct HeadingJumps {
+pub struct DriftCounts {
     /// Samples taken.
     pub samples: u64,
     /// Of those, jumps larger than [`PUSH_JUMP_DEG`].
@@ -263,8 +271,8 @@ impl SensorState {
 
     /// How many samples the drift estimate has taken, and how many of them jumped by more than
     /// [`PUSH_JUMP_DEG`] (see [`Self::estimate_imu_drift`]).
-    pub fn heading_jumps(&self) -> HeadingJumps {
-        HeadingJumps { samples: self.drift.samples, pushes: self.drift.pushes }
+    pub fn drift_counts(&self) -> DriftCounts {
+        DriftCounts { samples: self.drift.samples, pushes: self.drift.pushes }
     }
 
     /// The IMU drift currently removed from its readings, degrees counter-clockwise.

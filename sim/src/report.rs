@@ -195,7 +195,7 @@ pub enum ContactCause {
     /// A turn where the truth allows one at the centre: the robot was off it, by a localisation
     /// error or by Carto's own shift before the turn (see [`FirstContact::belief_error_m`]).
     TurnOffCentre,
-    /// Driving back after the bumper or a stalled FORWARD.
+    /// Driving back after the bumper, a stalled FORWARD or a pushed one.
     BackingOff,
     /// Anything else (between commands, idle, a FORWARD without a stored pose).
     Other,
@@ -233,7 +233,7 @@ impl ContactCause {
             ContactCause::TurnOffCentre => {
                 "turn in a cell where the truth allows one at the centre (off it: localisation or Carto's shift)"
             }
-            ContactCause::BackingOff => "backing off after the bumper or a stall",
+            ContactCause::BackingOff => "backing off after the bumper, a stall or a push",
             ContactCause::Other => "other",
         }
     }

@@ -350,8 +350,8 @@ impl Lockstep {
 
     /// A debug line when Carto stops a FORWARD as stalled (`carto/src/pilot/stall.rs`) or pushed
     /// (`carto/src/pilot.rs`, "Pushed"): where the robot really is, how far from it Carto's
-    /// belief now lies, and how many collisions the run has had (a push with none new is a
-    /// false alarm).
+    /// belief now lies, and how many collisions the run has had so far (a push stop whose count
+    /// did not rise since the FORWARD began, nor in the seconds before it, touched nothing).
     fn note_stop(&self, now: Instant, what: &str) {
         let p = self.twin.body().pose();
         let believed = self.carto.carto().believed_pose();

@@ -625,7 +625,7 @@ impl Pilot {
             self.forget_surroundings();
         }
         self.forward_from_m = motor.odometry().offset().along_m;
-        self.push_watch = self.push_watch_on.then(|| sensors.heading_jumps());
+        self.push_watch = self.push_watch_on.then(|| sensors.drift_counts());
         if let Some(watch) = self.stall_watch.as_mut() {
             watch.restart();
             // the straight reading at rest just taken is the first echo of this FORWARD
