@@ -112,6 +112,20 @@ pub struct CartoStats {
     pub sensor_errors: u64,
 }
 
+/// Where Carto believes the robot is ([`Carto::belief`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Belief {
+    /// The stored pose: a cell and a grid heading.
+    pub pose: GridPose,
+    /// The dead-reckoned offset from that cell's centre, in the stored heading's frame,
+    /// extrapolated to the moment asked for.
+    pub offset: crate::odometry::CellOffset,
+    /// How far the body faces from the stored heading, counter-clockwise degrees (the IMU,
+    /// extrapolated to the moment asked for, against the reference heading; 0 before a
+    /// reference is learnt).
+    pub off_heading_deg: f64,
+}
+
 /// A snapshot of Carto's state, for status lines and tests.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CartoStatus {
@@ -445,6 +459,21 @@ impl Carto {
     /// whole snapshot). `None` until a pose is stored.
     pub fn believed_pose(&self) -> Option<(GridPose, crate::odometry::CellOffset)> {
         self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
+    }
+
+    /// Carto's belief of the robot's pose at `now` ([`Belief`]): what it would act on if it
+    /// moved now. Read-only; `None` until a pose is stored.
+    pub fn belief(&self, now: Instant) -> Option<Belief> {
+        let pose = self.pilot.pose()?;
+        Some(Belief {
+            pose,
+            offset: self.motor.cell_offset(now, &self.sensors),
+            off_heading_deg: self
+                .sensors
+                .predicted_yaw(now, self.motor.config())
+                .zip(self.motor.reference_deg())
+                .map_or(0.0, |(yaw, reference)| yaw - reference),
+        })
     }
 
     /// Gives the safety checks known surface points, in the grid's metric frame

@@ -15,6 +15,6 @@ pub mod ultrasound;
 pub mod walls;
 pub mod wire;
 
-pub use crate::carto::{Carto, CartoStats, CartoStatus};
+pub use crate::carto::{Belief, Carto, CartoStats, CartoStatus};
 pub use config::CartoConfig;
 pub use runtime::{CartoRuntime, RuntimeStats, StepReport};

@@ -106,6 +106,72 @@ pub struct RobotProfile {
     /// design's 0.30 m leaves 15 cm to a wall on a cell line: the robot cannot turn there.
     /// A scenario may set its own (`cell:`); every part of a run then uses that one.
     pub grid_cell_m: f32,
+    /// How a run of this robot is scored: the margin it keeps, how far off a cell's centre a stop
+    /// may end, and the pass criteria generated rooms get ([`Scoring`]).
+    pub scoring: Scoring,
+}
+
+/// How a run of this robot is scored. The cells a body keeping `clearance_m` from everything,
+/// ending every command within `stop_within_m` of a cell's centre, can reach from its start cell
+/// are the *scored set*: coverage and accuracy count those; cells reachable only with less
+/// clearance are *tight* and count neither way.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scoring {
+    /// The margin the controller keeps from everything, metres (Carto keeps 2 cm).
+    pub clearance_m: f32,
+    /// How far from a cell's centre a command may end, metres.
+    pub stop_within_m: f32,
+    /// The pass criteria a generated room gets (a scenario file sets its own).
+    pub pass: PassCriteria,
+}
+
+/// The pass criteria of a run (each `None` is not checked). Touches and hard collisions are
+/// defined by the twin's report: a *hard collision* is a contact that began at 0.10 m/s or more
+/// or pushed the body 2 cm or more from where its wheels drove it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassCriteria {
+    /// Least fraction (0–1) of the scored set Cute's map shows free.
+    pub coverage_min: Option<f64>,
+    /// Least fraction (0–1) of the classified cells (tight cells left out) that are right.
+    pub map_accuracy_min: Option<f64>,
+    /// Most touches of any kind (`Some(0)`: a robot that senses beside its body).
+    pub touches_max: Option<u32>,
+    /// Most hard collisions.
+    pub hard_collisions_max: Option<u32>,
+    /// Most touches per 100 moves Cute sent.
+    pub touches_per_100_moves_max: Option<f64>,
+    /// Largest distance between the true body centre and Carto's belief, metres.
+    pub belief_error_max_m: Option<f64>,
+    /// 95th percentile of that distance over the run's samples, metres.
+    pub belief_error_p95_max_m: Option<f64>,
+    /// Largest angle between the true heading and Carto's believed heading, degrees.
+    pub belief_heading_error_max_deg: Option<f64>,
+    /// `Some(true)`: at the end, Cute's cell for the robot is the true one.
+    pub believed_cell_true: Option<bool>,
+}
+
+impl Default for Scoring {
+    /// The one-sonar robot of 2024: 2 cm kept, 2 cm off a centre, the criteria of
+    /// `scenarios/robots/mecanum-4wd.ron`.
+    fn default() -> Self {
+        Scoring {
+            clearance_m: 0.02,
+            stop_within_m: 0.02,
+            pass: PassCriteria {
+                coverage_min: Some(0.98),
+                map_accuracy_min: Some(0.95),
+                touches_max: None,
+                hard_collisions_max: Some(0),
+                touches_per_100_moves_max: Some(1.0),
+                belief_error_max_m: Some(0.05),
+                belief_error_p95_max_m: Some(0.03),
+                belief_heading_error_max_deg: Some(3.0),
+                believed_cell_true: Some(true),
+            },
+        }
+    }
 }
 
 /// Chassis geometry and mass.
@@ -374,6 +440,7 @@ impl Default for RobotProfile {
                 peer_lost_timeout_ms: 1500,
             },
             grid_cell_m: 0.45,
+            scoring: Scoring::default(),
         }
     }
 }
@@ -420,6 +487,44 @@ impl RobotProfile {
     /// Rim speed of a wheel at 100 % command, m/s.
     pub fn max_rim_speed_mps(&self) -> f32 {
         self.motor.max_wheel_rpm * core::f32::consts::TAU / 60.0 * self.geometry.wheel_radius_m
+    }
+
+    fn validate_scoring(&self, path: &str) -> Result<(), ProfileError> {
+        let bad = |field: &'static str, value: f64, rule: &'static str| {
+            Err(ProfileError::Invalid { path: path.to_owned(), field, value, rule })
+        };
+        let s = &self.scoring;
+        let half_cell = 0.5 * self.grid_cell_m;
+        for (field, v) in [("scoring.clearance_m", s.clearance_m), ("scoring.stop_within_m", s.stop_within_m)]
+        {
+            if !(v.is_finite() && v >= 0.0 && v < half_cell) {
+                return bad(field, decimal(v), "must be a finite number, zero or more, under half a cell");
+            }
+        }
+        let p = &s.pass;
+        for (field, v) in [
+            ("scoring.pass.coverage_min", p.coverage_min),
+            ("scoring.pass.map_accuracy_min", p.map_accuracy_min),
+        ] {
+            if let Some(v) = v
+                && !(0.0..=1.0).contains(&v)
+            {
+                return bad(field, v, "must be a fraction in [0, 1]");
+            }
+        }
+        for (field, v) in [
+            ("scoring.pass.touches_per_100_moves_max", p.touches_per_100_moves_max),
+            ("scoring.pass.belief_error_max_m", p.belief_error_max_m),
+            ("scoring.pass.belief_error_p95_max_m", p.belief_error_p95_max_m),
+            ("scoring.pass.belief_heading_error_max_deg", p.belief_heading_error_max_deg),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v >= 0.0)
+            {
+                return bad(field, v, "must be a finite number, zero or more");
+            }
+        }
+        Ok(())
     }
 
     fn validate_with_path(&self, path: &str) -> Result<(), ProfileError> {
@@ -511,6 +616,7 @@ impl RobotProfile {
                 "must be in [0, 90]",
             );
         }
+        self.validate_scoring(path)?;
         if self.serial.motor_baud == 0 {
             return bad("serial.motor_baud", 0.0, "must be at least 1");
         }

@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 
 pub mod app;
+pub mod belief;
 pub mod bench;
 pub mod body;
 pub mod drive;
@@ -21,8 +22,10 @@ pub mod replay;
 pub mod report;
 pub mod runner;
 pub mod scenario;
+pub mod scored;
 pub mod serve;
 pub mod sweep;
+pub mod touches;
 pub mod truth;
 pub mod truthimg;
 pub mod twin;

@@ -86,6 +86,25 @@ pub enum RecordingError {
     },
 }
 
+/// A decoding error in words (bincode's own `Display` is its debug form, e.g.
+/// `UnexpectedEnd { additional: 1 }`).
+fn decode_message(e: &bincode::error::DecodeError) -> String {
+    use bincode::error::DecodeError as E;
+    match e {
+        E::UnexpectedEnd { additional } => {
+            format!("the file ends {additional} byte(s) too early: truncated or not a recording")
+        }
+        E::LimitExceeded => "a length inside the file claims more than the file holds".to_string(),
+        E::UnexpectedVariant { found, .. } => format!("an unknown tag {found}: damaged or not a recording"),
+        E::Utf8 { .. } => "a name is not valid UTF-8: damaged or not a recording".to_string(),
+        E::InvalidBooleanValue(v) => format!("a flag holds {v}, neither 0 nor 1: damaged or not a recording"),
+        E::InvalidIntegerType { .. } | E::InvalidCharEncoding(_) | E::NonZeroTypeIsZero { .. } => {
+            "a value cannot be read: damaged or not a recording".to_string()
+        }
+        other => format!("cannot be read as a recording ({other})"),
+    }
+}
+
 impl Recording {
     /// Writes the recording to `path`.
     pub fn save(&self, path: &Path) -> Result<(), RecordingError> {
@@ -105,7 +124,7 @@ impl Recording {
             .map_err(|source| RecordingError::Io { path: label.clone(), source })?;
         let decode_error = |e: bincode::error::DecodeError| RecordingError::Decode {
             path: label.clone(),
-            message: e.to_string(),
+            message: decode_message(&e),
         };
         let (version, _): (u32, usize) =
             bincode::serde::decode_from_slice(&bytes, bincode::config::standard()).map_err(decode_error)?;
@@ -320,6 +339,14 @@ mod tests {
         match Recording::load(&path) {
             Err(RecordingError::Decode { message, .. }) => {
                 assert!(message.contains("7 bytes after"), "{message}")
+            }
+            other => panic!("{other:?}"),
+        }
+        // A truncated recording says so in words, not in bincode's debug form.
+        std::fs::write(&path, &spliced[..spliced.len() / 2]).unwrap();
+        match Recording::load(&path) {
+            Err(RecordingError::Decode { message, .. }) => {
+                assert!(message.contains("too early") && !message.contains('{'), "{message}")
             }
             other => panic!("{other:?}"),
         }

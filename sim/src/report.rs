@@ -1,21 +1,25 @@
 //! The run report: what happened, how well the room was mapped, and whether the scenario's
 //! expectations hold.
 //!
-//! * **coverage** — of the cells reachable from the start (ground truth), the fraction Cute's map
-//!   shows as free;
-//! * **map accuracy** — of the cells Cute's map has classified (free or obstacle), the fraction
-//!   that agree with the ground truth; cells Cute never learnt about do not count here (they count
-//!   against coverage);
-//! * **collisions** — contact starts between the robot and anything (see [`crate::world`]).
+//! * **coverage** — of the scored set (the cells this robot can reach keeping its clearance,
+//!   [`crate::scored`]), the fraction Cute's map shows as free;
+//! * **map accuracy** — of the cells Cute's map has classified (free or obstacle), tight cells
+//!   left out, the fraction that agree with the ground truth; cells Cute never learnt about do
+//!   not count here (they count against coverage);
+//! * **touches** — every contact between the robot and anything (`collisions`), each with its
+//!   severity; **hard collisions** among them ([`crate::touches`]);
+//! * **belief error** — Carto's own belief against the true body ([`crate::belief`]); Cute's
+//!   cell against the truth stays as information ([`crate::localisation`]).
 
 use std::fmt::Write as _;
 
 use carto::pilot::Activity;
 use serde::{Deserialize, Serialize};
 
+use crate::belief::BeliefReport;
 use crate::localisation::Localisation;
 use crate::scenario::Expectations;
-use crate::truth::RobotTruth;
+use crate::touches::TouchReport;
 use crate::world::{Touched, Unphysical};
 
 /// Traffic on one direction of one link.
@@ -53,60 +57,7 @@ pub struct Check {
     pub pass: bool,
 }
 
-/// How Cute's map compares with the true room.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct MapScore {
-    /// Reachable cells in the true room.
-    pub reachable: usize,
-    /// Reachable cells Cute shows as free.
-    pub reachable_known_free: usize,
-    /// Reachable cells Cute shows as obstacles: coverage lost to a refusal or a bump, not to a
-    /// cell left unknown (the rest of the reachable cells not known free).
-    pub reachable_marked_obstacle: usize,
-    /// Cells Cute has classified (free or obstacle).
-    pub classified: usize,
-    /// Classified cells that agree with the truth.
-    pub correct: usize,
-}
-
-impl MapScore {
-    /// Scores `known` (row-major; `Some(true)` free, `Some(false)` obstacle, `None` unknown).
-    pub fn score(truth: &RobotTruth, start: (usize, usize), known: &[Option<bool>]) -> MapScore {
-        let reachable = truth.reachable_from(start);
-        let mut s = MapScore::default();
-        for row in 0..truth.rows {
-            for col in 0..truth.cols {
-                let i = row * truth.cols + col;
-                let k = known.get(i).copied().flatten();
-                if reachable[i] {
-                    s.reachable += 1;
-                    match k {
-                        Some(true) => s.reachable_known_free += 1,
-                        Some(false) => s.reachable_marked_obstacle += 1,
-                        None => {}
-                    }
-                }
-                if let Some(free) = k {
-                    s.classified += 1;
-                    if free == truth.is_free(row, col) {
-                        s.correct += 1;
-                    }
-                }
-            }
-        }
-        s
-    }
-
-    /// Fraction of reachable cells known free (1.0 for a room with none).
-    pub fn coverage(&self) -> f64 {
-        if self.reachable == 0 { 1.0 } else { self.reachable_known_free as f64 / self.reachable as f64 }
-    }
-
-    /// Fraction of classified cells that are right (1.0 when none are classified).
-    pub fn accuracy(&self) -> f64 {
-        if self.classified == 0 { 1.0 } else { self.correct as f64 / self.classified as f64 }
-    }
-}
+pub use crate::scored::MapScore;
 
 /// What the robot was doing at the run's first contact, and what the ground truth says of it.
 /// One contact is enough to fail a real-room run and usually costs the pose, so the first one is
@@ -278,8 +229,12 @@ pub struct Report {
     pub map_accuracy: f64,
     /// Moves Cute sent (cartography commands and trajectory commands).
     pub moves: u64,
-    /// Collisions counted by the physics.
+    /// Collisions counted by the physics: every touch ([`Report::touches`]).
     pub collisions: u32,
+    /// Every touch with its severity.
+    pub touches: TouchReport,
+    /// Carto's belief against the truth: the localisation error a run is judged by.
+    pub belief: BeliefReport,
     /// The first contact, if there was one.
     pub first_contact: Option<FirstContact>,
     /// Steps after which the body moved faster than its wheels can drive it
@@ -292,7 +247,8 @@ pub struct Report {
     pub final_cell: Option<(usize, usize)>,
     /// What Cute believes is the robot's cell at the end.
     pub cute_cell: (u8, u8),
-    /// How far Cute's belief strayed from the truth at the end of each move.
+    /// How far Cute's belief (the centre of its cell) strayed from the truth at the end of each
+    /// move: information, since Carto may stop off a centre on purpose.
     pub localisation: Localisation,
     /// Traffic per link.
     pub links: Vec<LinkStats>,
@@ -322,8 +278,8 @@ impl Report {
                 actual: format!(
                     "{:.1}% ({}/{})",
                     self.coverage * 100.0,
-                    self.map.reachable_known_free,
-                    self.map.reachable
+                    self.map.scored_known_free,
+                    self.map.scored
                 ),
                 pass: self.coverage + 1e-9 >= min,
             });
@@ -347,6 +303,34 @@ impl Report {
                 expected: format!("<= {max}"),
                 actual: self.collisions.to_string(),
                 pass: self.collisions <= max,
+            });
+        }
+        let t = &self.touches;
+        if let Some(max) = expect.touches_max {
+            checks.push(Check {
+                name: "touches_max".into(),
+                expected: format!("<= {max}"),
+                actual: t.count.to_string(),
+                pass: t.count <= max,
+            });
+        }
+        if let Some(max) = expect.hard_collisions_max {
+            checks.push(Check {
+                name: "hard_collisions_max".into(),
+                expected: format!("<= {max}"),
+                actual: format!(
+                    "{} (fastest approach {:.2} m/s, largest push {:.3} m)",
+                    t.hard, t.fastest_approach_m_s, t.largest_push_m
+                ),
+                pass: t.hard <= max,
+            });
+        }
+        if let Some(max) = expect.touches_per_100_moves_max {
+            checks.push(Check {
+                name: "touches_per_100_moves_max".into(),
+                expected: format!("<= {max:.2}"),
+                actual: format!("{:.2} ({} in {} moves)", t.per_100_moves, t.count, self.moves),
+                pass: t.per_100_moves <= max + 1e-9,
             });
         }
         if let Some(limit) = expect.finish_within_s {
@@ -388,6 +372,31 @@ impl Report {
                 expected: format!("<= {max:.1} deg"),
                 actual: format!("{:.1} deg at {:.1} s", loc.heading_error_max_deg, loc.heading_error_at_s),
                 pass: loc.heading_error_max_deg <= max,
+            });
+        }
+        let b = &self.belief;
+        if let Some(max) = expect.belief_error_max_m {
+            checks.push(Check {
+                name: "belief_error_max_m".into(),
+                expected: format!("<= {max:.3} m"),
+                actual: format!("{:.3} m at {:.1} s", b.error_max_m, b.error_max_at_s),
+                pass: b.error_max_m <= max,
+            });
+        }
+        if let Some(max) = expect.belief_error_p95_max_m {
+            checks.push(Check {
+                name: "belief_error_p95_max_m".into(),
+                expected: format!("<= {max:.3} m"),
+                actual: format!("{:.3} m over {} samples", b.error_p95_m, b.samples),
+                pass: b.error_p95_m <= max,
+            });
+        }
+        if let Some(max) = expect.belief_heading_error_max_deg {
+            checks.push(Check {
+                name: "belief_heading_error_max_deg".into(),
+                expected: format!("<= {max:.1} deg"),
+                actual: format!("{:.1} deg at {:.1} s", b.heading_error_max_deg, b.heading_error_max_at_s),
+                pass: b.heading_error_max_deg <= max,
             });
         }
         if let Some(want) = expect.believed_cell_true {
@@ -445,19 +454,34 @@ impl Report {
         for e in &self.mission_errors {
             let _ = writeln!(s, "  error         {e}");
         }
-        let marked = match self.map.reachable_marked_obstacle {
+        let m = &self.map;
+        let marked = match m.scored_marked_obstacle {
             0 => String::new(),
-            n => format!(" ({n} reachable marked obstacle)"),
+            n => format!(" ({n} marked obstacle)"),
+        };
+        let tight = match m.tight {
+            0 => String::new(),
+            n => format!(
+                "; {n} tight (reachable only closer than {:.0} cm: not scored; Cute has {} free, {} obstacle)",
+                m.clearance_m * 100.0,
+                m.tight_known_free,
+                m.tight_marked_obstacle
+            ),
         };
         let _ = writeln!(
             s,
-            "map             {}x{} grid, coverage {:.1}% of {} reachable cells{marked}, accuracy {:.1}% of {} classified",
+            "map             {}x{} grid, coverage {:.1}% of {} scored cells{marked}, accuracy {:.1}% of {} classified{tight}{}",
             self.grid.0,
             self.grid.1,
             self.coverage * 100.0,
-            self.map.reachable,
+            m.scored,
             self.map_accuracy * 100.0,
-            self.map.classified
+            m.classified,
+            if m.exact {
+                ""
+            } else {
+                " (room too large for the clearance lattice: scored on every reachable cell)"
+            }
         );
         let cell = self.final_cell.map_or("off grid".to_string(), |(r, c)| format!("cell ({r}, {c})"));
         let _ = writeln!(
@@ -465,16 +489,33 @@ impl Report {
             "robot           x {:.3} m, y {:.3} m, heading {:.1} deg, {cell}; Cute believes ({}, {})",
             self.final_pose.0, self.final_pose.1, self.final_pose.2, self.cute_cell.0, self.cute_cell.1
         );
+        let b = &self.belief;
         let _ = writeln!(
             s,
-            "localisation    at the end of {} moves: position error max {:.3} m (at {:.1} s), heading error max {:.1} deg (at {:.1} s)",
+            "belief          Carto's belief against the truth over {} samples: error max {:.3} m (at {:.1} s), p95 {:.3} m; heading error max {:.1} deg (at {:.1} s); stops up to {:.3} m off Carto's cell centre",
+            b.samples,
+            b.error_max_m,
+            b.error_max_at_s,
+            b.error_p95_m,
+            b.heading_error_max_deg,
+            b.heading_error_max_at_s,
+            b.stop_offset_max_m
+        );
+        let _ = writeln!(
+            s,
+            "Cute's cell     at the end of {} moves: its centre up to {:.3} m from the robot (at {:.1} s), heading up to {:.1} deg off (at {:.1} s)",
             self.localisation.samples,
             self.localisation.position_error_max_m,
             self.localisation.position_error_at_s,
             self.localisation.heading_error_max_deg,
             self.localisation.heading_error_at_s
         );
-        let _ = writeln!(s, "collisions      {}", self.collisions);
+        let t = &self.touches;
+        let _ = writeln!(
+            s,
+            "touches         {} ({:.2} per 100 moves), {} hard (began at 0.10 m/s or more, or pushed 2 cm or more), {} unseen by Carto; fastest approach {:.2} m/s, largest push {:.3} m",
+            t.count, t.per_100_moves, t.hard, t.unseen, t.fastest_approach_m_s, t.largest_push_m
+        );
         let _ = writeln!(s, "physics         {}", self.unphysical.describe());
         if let Some(c) = &self.first_contact {
             let cell = c.cell.map_or("off grid".to_string(), |(r, col)| format!("cell ({r}, {col})"));
@@ -536,8 +577,18 @@ impl Report {
         }
         let _ = writeln!(
             s,
-            "coverage {}/{}, accuracy {}/{}",
-            r.map.reachable_known_free, r.map.reachable, r.map.correct, r.map.classified
+            "coverage {}/{} scored ({} tight), accuracy {}/{}",
+            r.map.scored_known_free, r.map.scored, r.map.tight, r.map.correct, r.map.classified
+        );
+        let _ = writeln!(
+            s,
+            "touches {}, hard {}, unseen {}; belief error max {:.3} m, p95 {:.3} m, heading max {:.1} deg",
+            r.touches.count,
+            r.touches.hard,
+            r.touches.unseen,
+            r.belief.error_max_m,
+            r.belief.error_p95_m,
+            r.belief.heading_error_max_deg
         );
         let _ = writeln!(s, "final cell {:?}, Cute believes {:?}", r.final_cell, r.cute_cell);
         let _ = writeln!(
@@ -601,6 +652,8 @@ mod tests {
             map_accuracy: 1.0,
             moves: 3,
             collisions: 0,
+            touches: TouchReport::default(),
+            belief: BeliefReport::default(),
             first_contact: None,
             unphysical,
             final_pose: (0.0, 0.0, 0.0),

@@ -24,6 +24,7 @@ use transport::{
     Tracer, mem_listener,
 };
 
+use crate::belief::BeliefTracker;
 use crate::body::RobotBody;
 use crate::grid::GridFrame;
 use crate::localisation::{Localisation, carto_belief};
@@ -32,9 +33,12 @@ use crate::oracle::{Oracle, to_carto_frame};
 use crate::record::EndpointLog;
 use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
 use crate::scenario::{Fault, LinkFaults, LoadedScenario};
+use crate::scored::ScoredSet;
+use crate::touches::TouchTracker;
 use crate::truth::RobotTruth;
 use crate::twin::{Twin, WriteBudget};
 
+mod measure;
 mod observe;
 mod report;
 
@@ -132,6 +136,14 @@ pub struct Lockstep {
     /// The link-log hash, computed once the run is over (the logs no longer change then).
     final_hash: std::sync::OnceLock<String>,
     localisation: Localisation,
+    /// Carto's belief against the truth.
+    belief: BeliefTracker,
+    /// Every touch with its severity.
+    touches: TouchTracker,
+    /// Carto's refusals counted so far (cells reported blocked, turns refused).
+    refusals_seen: u64,
+    /// The cells the run is scored on, computed once when first asked for.
+    scored: std::sync::OnceLock<ScoredSet>,
     /// Where Carto believed the robot was, sampled whenever the twin adds a trail point.
     believed_trail: Vec<(f32, f32)>,
     settled_at: Option<Instant>,
@@ -227,6 +239,12 @@ impl Lockstep {
             logs: Vec::new(),
             final_hash: std::sync::OnceLock::new(),
             localisation: Localisation::default(),
+            belief: BeliefTracker::default(),
+            touches: TouchTracker::new(robot_model::kinematics::MecanumKinematics::from_profile(
+                &loaded.profile,
+            )),
+            refusals_seen: 0,
+            scored: std::sync::OnceLock::new(),
             believed_trail: Vec::new(),
             settled_at: None,
             open_ended: false,
@@ -324,6 +342,7 @@ impl Lockstep {
         if at_end {
             self.headless_end = Some(now);
         }
+        self.measure(now, move_ended, at_end);
         if move_ended || at_end {
             let (x, y, heading) = self.cute.cute().robot();
             self.localisation.sample(
@@ -621,6 +640,11 @@ impl Lockstep {
     /// The ground truth.
     pub fn truth(&self) -> &RobotTruth {
         &self.truth
+    }
+
+    /// The cells the run is scored on ([`crate::scored`]), computed on first use.
+    pub fn scored_set(&self) -> &ScoredSet {
+        self.scored.get_or_init(|| ScoredSet::of(&self.loaded))
     }
 
     /// The robot's trail (world metres).

@@ -212,8 +212,29 @@ pub struct Expectations {
     /// Minimum fraction (0–1) of the cells Cute has classified that agree with the true room.
     #[serde(deserialize_with = "values::fraction")]
     pub map_accuracy_min: Option<f64>,
-    /// Maximum number of collisions between the robot and anything.
+    /// Maximum number of collisions between the robot and anything: every touch, light or hard.
     pub collisions_max: Option<u32>,
+    /// Maximum number of touches ([`crate::touches`]); the same count as `collisions_max`, named
+    /// as the profile's pass criteria name it.
+    #[serde(default)]
+    pub touches_max: Option<u32>,
+    /// Maximum number of hard collisions (began at 0.10 m/s or more, or pushed the body 2 cm or
+    /// more from where its wheels drove it).
+    #[serde(default)]
+    pub hard_collisions_max: Option<u32>,
+    /// Maximum touches per 100 moves Cute sent.
+    #[serde(default)]
+    pub touches_per_100_moves_max: Option<f64>,
+    /// Largest distance, metres, between the true body centre and Carto's belief
+    /// ([`crate::belief`]).
+    #[serde(default)]
+    pub belief_error_max_m: Option<f64>,
+    /// Largest 95th percentile of that distance, metres.
+    #[serde(default)]
+    pub belief_error_p95_max_m: Option<f64>,
+    /// Largest angle, degrees, between the true heading and Carto's believed heading.
+    #[serde(default)]
+    pub belief_heading_error_max_deg: Option<f64>,
     /// The mission must end within this many seconds of sim time.
     #[serde(deserialize_with = "values::optional_positive_s")]
     pub finish_within_s: Option<f64>,
@@ -230,6 +251,29 @@ pub struct Expectations {
     /// `Some(true)`: at the end, the cell Cute believes the robot is in is the true one.
     #[serde(default)]
     pub believed_cell_true: Option<bool>,
+}
+
+impl Expectations {
+    /// The expectations a generated room gets: the robot's pass criteria (its profile's
+    /// `scoring.pass`) and the room's time limit.
+    pub fn from_criteria(
+        c: &robot_model::profile::PassCriteria,
+        finish_within_s: Option<f64>,
+    ) -> Expectations {
+        Expectations {
+            coverage_min: c.coverage_min,
+            map_accuracy_min: c.map_accuracy_min,
+            finish_within_s,
+            believed_cell_true: c.believed_cell_true,
+            touches_max: c.touches_max,
+            hard_collisions_max: c.hard_collisions_max,
+            touches_per_100_moves_max: c.touches_per_100_moves_max,
+            belief_error_max_m: c.belief_error_max_m,
+            belief_error_p95_max_m: c.belief_error_p95_max_m,
+            belief_heading_error_max_deg: c.belief_heading_error_max_deg,
+            ..Expectations::default()
+        }
+    }
 }
 
 /// A complete scenario file.

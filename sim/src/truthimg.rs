@@ -2,8 +2,9 @@
 //! ([`crate::truth::RobotTruth`]), printed as counts and drawn as `truth.png`.
 //!
 //! The picture shows the true room (as `map.png` does), each cell tinted by the truth — green
-//! reachable from the start, yellow free but not reachable (a closed pocket), red the robot
-//! cannot stand there —, a dark dot on free cells where the robot cannot turn on the spot, a
+//! scored (reachable keeping the profile's clearance, [`crate::scored`]), purple tight (reachable
+//! only closer than that: not scored), yellow free but not reachable (a closed pocket), red the
+//! robot cannot stand there —, a dark dot on free cells where the robot cannot turn on the spot, a
 //! magenta bar on the line between two free cells whose move is blocked (a thin wall between
 //! them), and the start cell framed in blue; with `--clearance`, an orange ring in every reachable
 //! cell whose centre does not keep the first clearance asked for. A legend under the picture
@@ -12,7 +13,8 @@
 //! ```
 //! let loaded = sim::scenario::LoadedScenario::builtin_default()?;
 //! let counts = sim::truthimg::TruthCounts::of(&loaded);
-//! assert_eq!(counts.reachable, 67); // the default room: the coverage denominator of its report
+//! assert_eq!(counts.reachable, 67); // the default room, zero clearance
+//! assert_eq!(counts.scored + counts.tight, counts.reachable); // scored: coverage's denominator
 //! let png = sim::truthimg::truth_picture(&loaded);
 //! assert!(png.width() > 100);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -27,9 +29,11 @@ use crate::freespace::FreeSpace;
 use crate::mapimg::{PALETTE, room_canvas};
 use crate::picture::{LegendEntry, Swatch, blend, fill, line, with_legend};
 use crate::scenario::{LoadedScenario, ScenarioError};
+use crate::scored::ScoredSet;
 
 const REACHABLE: ([u8; 3], f32) = ([60, 200, 90], 0.35);
 const POCKET: ([u8; 3], f32) = ([240, 200, 40], 0.5);
+const TIGHT_CELL: ([u8; 3], f32) = ([150, 70, 220], 0.45);
 const NOT_FREE: ([u8; 3], f32) = ([230, 40, 40], 0.45);
 const NO_TURN: [u8; 3] = [60, 60, 60];
 const BLOCKED_MOVE: [u8; 3] = [220, 0, 200];
@@ -41,12 +45,16 @@ const TIGHT_ENTRY: LegendEntry =
     LegendEntry::new(Swatch::Line(TIGHT), "ring: centre not --clearance clear (first value)");
 
 /// What the colours of `truth.png` mean.
-pub const LEGEND: [LegendEntry; 8] = [
+pub const LEGEND: [LegendEntry; 9] = [
     LegendEntry::new(Swatch::Fill(PALETTE.obstacle), "wall/obstacle"),
     LegendEntry::new(Swatch::Fill(PALETTE.outside), "outside the room"),
     LegendEntry::new(
         Swatch::Tint { base: PALETTE.floor, tint: REACHABLE.0, alpha: REACHABLE.1 },
-        "reachable",
+        "scored (reachable, clearance kept)",
+    ),
+    LegendEntry::new(
+        Swatch::Tint { base: PALETTE.floor, tint: TIGHT_CELL.0, alpha: TIGHT_CELL.1 },
+        "tight: reachable only closer (not scored)",
     ),
     LegendEntry::new(
         Swatch::Tint { base: PALETTE.floor, tint: POCKET.0, alpha: POCKET.1 },
@@ -62,7 +70,7 @@ pub const LEGEND: [LegendEntry; 8] = [
 ];
 
 /// The truth of a room in numbers.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TruthCounts {
     /// Grid rows and columns.
     pub rows: usize,
@@ -70,8 +78,15 @@ pub struct TruthCounts {
     pub cols: usize,
     /// Cells where the robot can stand.
     pub free: usize,
-    /// Free cells connected to the start by moves: what coverage counts.
+    /// Free cells connected to the start by moves, at zero clearance.
     pub reachable: usize,
+    /// Reachable cells a body keeping the profile's clearance, stopping near the centres, can
+    /// reach: what coverage counts ([`crate::scored`]).
+    pub scored: usize,
+    /// Reachable cells that are not scored.
+    pub tight: usize,
+    /// The clearance and the stop distance of the scored set, metres.
+    pub scoring_m: (f32, f32),
     /// Reachable cells where the robot can also turn on the spot.
     pub reachable_turnable: usize,
     /// Moves between two free neighbours that the body's sweep blocks.
@@ -92,6 +107,11 @@ pub struct TruthCounts {
 impl TruthCounts {
     /// Counts the truth of `loaded` from its start cell.
     pub fn of(loaded: &LoadedScenario) -> TruthCounts {
+        TruthCounts::with_set(loaded, &ScoredSet::of(loaded))
+    }
+
+    /// [`TruthCounts::of`], with the scored set already computed.
+    pub fn with_set(loaded: &LoadedScenario, set: &ScoredSet) -> TruthCounts {
         let t = loaded.truth();
         let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
         let reachable = t.reachable_from(start);
@@ -119,6 +139,9 @@ impl TruthCounts {
             cols: t.cols,
             free: cells().filter(|&(r, c)| t.is_free(r, c)).count(),
             reachable: reachable.iter().filter(|&&x| x).count(),
+            scored: set.scored_count(),
+            tight: set.tight_count(),
+            scoring_m: (set.clearance_m, set.stop_within_m),
             reachable_turnable: cells()
                 .filter(|&(r, c)| reachable[r * t.cols + c] && t.can_turn(r, c))
                 .count(),
@@ -133,7 +156,17 @@ impl TruthCounts {
         let mut lines = vec![
             format!("{label}: {} × {} cells of {cell:.2} m", self.rows, self.cols),
             format!("  free (the robot fits)        {}", self.free),
-            format!("  reachable from the start     {}  (what coverage counts)", self.reachable),
+            format!("  reachable from the start     {}  (at zero clearance)", self.reachable),
+            format!(
+                "  scored                       {}  (reachable keeping {:.1} cm, stopping ≤ {:.1} cm off centres: what coverage counts)",
+                self.scored,
+                self.scoring_m.0 * 100.0,
+                self.scoring_m.1 * 100.0
+            ),
+            format!(
+                "  tight                        {}  (reachable only closer: counted neither way)",
+                self.tight
+            ),
             format!("  reachable, turn on the spot  {}", self.reachable_turnable),
             format!("  free but not reachable       {}", self.free - self.reachable),
             format!("  moves blocked between free   {}", self.blocked_moves),
@@ -200,18 +233,22 @@ pub struct ClearanceBound {
 
 /// Draws `truth.png` for `loaded` (see the module docs).
 pub fn truth_picture(loaded: &LoadedScenario) -> RgbImage {
-    truth_picture_ringing(loaded, None)
+    truth_picture_ringing(loaded, &ScoredSet::of(loaded), None)
 }
 
-/// [`truth_picture`], with an orange ring inside every reachable cell whose centre `keeps`
-/// (row-major, [`crate::freespace::centre_keeps`]) says does not keep a clearance.
-pub fn truth_picture_ringing(loaded: &LoadedScenario, keeps: Option<&[bool]>) -> RgbImage {
+/// [`truth_picture`] with the scored set `set`, and an orange ring inside every reachable cell
+/// whose centre `keeps` (row-major, [`crate::freespace::centre_keeps`]) says does not keep a
+/// clearance.
+pub fn truth_picture_ringing(loaded: &LoadedScenario, set: &ScoredSet, keeps: Option<&[bool]>) -> RgbImage {
     let t = loaded.truth();
     let frame = t.frame;
     let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
-    let reachable = t.reachable_from(start);
+    let reachable = &set.reachable;
     let (mut img, grid) = room_canvas(&loaded.scenario, &frame, |row, col, c| {
-        let (tint, alpha) = if reachable.get(row * frame.cols + col).copied().unwrap_or(false) {
+        let i = row * frame.cols + col;
+        let (tint, alpha) = if set.tight.get(i).copied().unwrap_or(false) {
+            TIGHT_CELL
+        } else if reachable.get(i).copied().unwrap_or(false) {
             REACHABLE
         } else if t.is_free(row, col) {
             POCKET
@@ -329,7 +366,8 @@ impl TruthArgs {
     /// Prints the counts and writes the picture.
     pub fn run(&self) -> Result<(), TruthError> {
         let loaded = LoadedScenario::load_or_default(self.scenario.as_deref())?;
-        let c = TruthCounts::of(&loaded);
+        let set = ScoredSet::of(&loaded);
+        let c = TruthCounts::with_set(&loaded, &set);
         let stops = if self.stop_within.is_empty() { vec![0.0, 0.02] } else { self.stop_within.clone() };
         let mut bounds = Vec::new();
         for &clearance_m in &self.clearance {
@@ -359,7 +397,9 @@ impl TruthArgs {
                 c,
             )
         });
-        truth_picture_ringing(&loaded, keeps.as_deref()).save(&path).map_err(|e| write(e.to_string()))?;
+        truth_picture_ringing(&loaded, &set, keeps.as_deref())
+            .save(&path)
+            .map_err(|e| write(e.to_string()))?;
         text.push_str(&format!("wrote {}\n", path.display()));
         crate::output::print_stdout(&text)
             .map_err(|e| TruthError::Write { path: "<stdout>".into(), message: e.to_string() })
@@ -393,6 +433,26 @@ mod tests {
         assert!(png.height() > png.width() * 5 / 8, "a legend is added under the room");
     }
 
+    /// Generated flat room 19 has two cells the body reaches only closer than Carto's 2 cm
+    /// (stopping within 2 cm of the centres): they are counted apart and tinted purple. (The
+    /// furnished scenarios, hand-drawn or measured, have none with the default profile.)
+    #[test]
+    fn a_room_with_tight_cells_shows_them() {
+        let room = crate::generate::generate(crate::generate::RoomStyle::Flat, 19).unwrap();
+        let loaded =
+            LoadedScenario::from_ron_str(&room.to_ron(), "flat-19.ron", std::path::Path::new(".")).unwrap();
+        let set = ScoredSet::of(&loaded);
+        let c = TruthCounts::with_set(&loaded, &set);
+        assert_eq!((c.tight, c.scored + c.tight), (2, c.reachable), "{c:?}");
+        assert!(c.text("flat 19", 0.45, &[]).contains("tight                        2  "));
+        let png = truth_picture_ringing(&loaded, &set, None);
+        let purple = blend(PALETTE.floor, TIGHT_CELL.0, TIGHT_CELL.1);
+        let tinted = png.pixels().filter(|p| p.0 == purple).count();
+        assert!(tinted > 200, "tight cells are drawn ({tinted} px)");
+        let furnished = LoadedScenario::load(std::path::Path::new("../scenarios/furnished.ron")).unwrap();
+        assert_eq!(ScoredSet::of(&furnished).tight_count(), 0);
+    }
+
     /// `--clearance` rings the reachable cells whose centre does not keep it, and says so in the
     /// legend; without it there is no ring.
     #[test]
@@ -406,8 +466,9 @@ mod tests {
         assert!(keeps.iter().any(|&k| k) && !keeps.iter().all(|&k| k), "{keeps:?}");
         let ringed = |png: &RgbImage| png.pixels().filter(|p| p.0 == TIGHT).count();
         assert_eq!(ringed(&truth_picture(&loaded)), 0);
-        let legend_only = ringed(&truth_picture_ringing(&loaded, Some(&vec![true; keeps.len()])));
+        let set = ScoredSet::of(&loaded);
+        let legend_only = ringed(&truth_picture_ringing(&loaded, &set, Some(&vec![true; keeps.len()])));
         assert!(legend_only > 0, "the legend's swatch");
-        assert!(ringed(&truth_picture_ringing(&loaded, Some(&keeps))) > legend_only + 100);
+        assert!(ringed(&truth_picture_ringing(&loaded, &set, Some(&keeps))) > legend_only + 100);
     }
 }

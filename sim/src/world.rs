@@ -176,7 +176,16 @@ pub struct ContactStart {
     pub part: usize,
     /// Where the shapes meet (the deepest point when they overlap), world metres.
     pub at: (f32, f32),
+    /// How fast the robot's surface closed on the shape when the contact began, m/s: the
+    /// velocity of the robot's touching point before the step, along the contact normal
+    /// (0 when it was moving away or the query failed).
+    pub approach_m_s: f32,
+    /// Which pair this is ([`SimWorld::contacts_ended`] names it again when it ends).
+    pub key: ContactKey,
 }
+
+/// One robot–shape contact, from its start to its end (the shape's collider handle).
+pub type ContactKey = (u32, u32);
 
 /// The physics world of one scenario.
 pub struct SimWorld {
@@ -202,6 +211,10 @@ pub struct SimWorld {
     shape_kinds: Vec<Touched>,
     /// The contacts that started in the last step.
     started: Vec<ContactStart>,
+    /// The contacts that ended in the last step.
+    ended: Vec<ContactKey>,
+    /// The robot's linear (m/s) and angular (rad/s) velocity and centre before the last step.
+    before_step: ((f32, f32), f32, (f32, f32)),
     collisions: u32,
     front_contact: bool,
     speed_limit: SpeedLimit,
@@ -338,6 +351,8 @@ impl SimWorld {
             touching: BTreeSet::new(),
             shape_kinds,
             started: Vec::new(),
+            ended: Vec::new(),
+            before_step: ((0.0, 0.0), 0.0, (0.0, 0.0)),
             collisions: 0,
             front_contact: false,
             speed_limit: SpeedLimit::of(profile),
@@ -354,6 +369,10 @@ impl SimWorld {
 
     /// Advances the world by one fixed step (the `dt` given to [`SimWorld::new`]).
     pub fn step(&mut self) {
+        if let Some(b) = self.bodies.get(self.robot) {
+            let (v, c) = (b.linvel(), b.translation());
+            self.before_step = ((v.x, v.y), b.angvel(), (c.x, c.y));
+        }
         self.pipeline.step(
             Vector::ZERO,
             &self.params,
@@ -438,6 +457,8 @@ impl SimWorld {
                 );
         }
         let new_keys: Vec<(u32, u32)> = now_touching.difference(&self.touching).copied().collect();
+        self.ended = self.touching.difference(&now_touching).copied().collect();
+        let ((vx, vy), omega, (cx, cy)) = self.before_step;
         self.started = new_keys
             .iter()
             .filter_map(|&(index, generation)| {
@@ -445,7 +466,7 @@ impl SimWorld {
                 let part = collider.user_data as usize;
                 // where the shapes meet (the deepest point when they overlap); the robot's centre
                 // if the query fails
-                let at = rapier2d::parry::query::contact(
+                let contact = rapier2d::parry::query::contact(
                     robot.position(),
                     robot.shape(),
                     collider.position(),
@@ -453,9 +474,22 @@ impl SimWorld {
                     TOUCH_QUERY_M,
                 )
                 .ok()
-                .flatten()
-                .map_or(robot.translation(), |c| c.point2);
-                Some(ContactStart { touched: *self.shape_kinds.get(part)?, part, at: (at.x, at.y) })
+                .flatten();
+                let at = contact.map_or(robot.translation(), |c| c.point2);
+                // The touching point's velocity before the step (v + ω × r), along the robot's
+                // outward normal.
+                let approach_m_s = contact.map_or(0.0, |c| {
+                    let (rx, ry) = (c.point1.x - cx, c.point1.y - cy);
+                    let (px, py) = (vx - omega * ry, vy + omega * rx);
+                    (px * c.normal1.x + py * c.normal1.y).max(0.0)
+                });
+                Some(ContactStart {
+                    touched: *self.shape_kinds.get(part)?,
+                    part,
+                    at: (at.x, at.y),
+                    approach_m_s,
+                    key: (index, generation),
+                })
             })
             .collect();
         let started = new_keys.len() as u32;
@@ -539,6 +573,16 @@ impl SimWorld {
     /// How many times the robot has started touching something.
     pub fn collisions(&self) -> u32 {
         self.collisions
+    }
+
+    /// The contacts that ended in the last step (each named as it started, [`ContactStart::key`]).
+    pub fn contacts_ended(&self) -> &[ContactKey] {
+        &self.ended
+    }
+
+    /// The robot's velocity now: linear (world, m/s) and angular (rad/s, counter-clockwise).
+    pub fn robot_velocity(&self) -> ((f32, f32), f32) {
+        self.robot_body().map_or(((0.0, 0.0), 0.0), |b| ((b.linvel().x, b.linvel().y), b.angvel()))
     }
 
     /// The contacts that started in the last step (empty when none did).

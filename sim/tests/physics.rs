@@ -11,6 +11,7 @@ use robot_model::time::{Duration, Instant};
 use sha2::{Digest, Sha256};
 use sim::body::RobotBody;
 use sim::scenario::Scenario;
+use sim::touches::{NoticeCounters, StepMotion, TouchTracker};
 use sim::world::{SimWorld, Touched};
 
 const DT: Duration = Duration::from_millis(5);
@@ -434,4 +435,75 @@ fn a_contact_says_what_the_robot_touched() {
     assert_eq!(touched[0].class(), "box turned past 22.5° from the grid");
     // nothing in the way: the room's east wall, square to the grid
     assert_eq!(touched_driving_east(""), [Touched::RoomWall { off_grid_deg: 0.0 }]);
+}
+
+/// Steps `body` with wheel setpoints `sp` for `seconds`, feeding a touch tracker as the runner
+/// does (Carto's counters stay at zero: nothing notices).
+fn drive_tracked(
+    body: &mut RobotBody,
+    tracker: &mut TouchTracker,
+    sp: [f32; 4],
+    seconds: f32,
+    t0: f64,
+) -> f64 {
+    let steps = (seconds / DT.as_secs_f32()).round() as usize;
+    let mut t = t0;
+    for _ in 0..steps {
+        body.step(sp);
+        t += DT.as_secs_f64();
+        let ((vx, vy), _) = body.world().robot_velocity();
+        let motion =
+            StepMotion { body_velocity: (vx, vy), heading: body.pose().theta, wheel_rpm: body.wheel_rpm() };
+        let w = body.world();
+        tracker.step(
+            t,
+            DT.as_secs_f64(),
+            (w.contacts_started(), w.contacts_ended()),
+            motion,
+            NoticeCounters::default(),
+            || "test".into(),
+        );
+    }
+    t
+}
+
+#[test]
+fn a_head_on_drive_into_a_wall_at_full_speed_is_a_hard_collision() {
+    let p = quiet_profile();
+    // The front face 0.5 m from a wall, full speed ahead for 2.5 s.
+    let mut body = RobotBody::new(
+        &room("Segment(from: (0.63, -1.0), to: (0.63, 1.0))"),
+        &p,
+        Pose2::new(0.0, 0.0, 0.0),
+        DT,
+    );
+    let mut tracker = TouchTracker::new(MecanumKinematics::from_profile(&p));
+    let t = drive_tracked(&mut body, &mut tracker, [p.motor.max_wheel_rpm; 4], 2.5, 0.0);
+    let r = tracker.report(1, t);
+    assert_eq!(r.count, 1, "{r:?}");
+    let touch = &r.list[0];
+    assert!(touch.approach_m_s > 0.3, "met the wall at top speed: {touch:?}");
+    assert!(touch.push_m > 0.1, "the wheels drove on against the wall: {touch:?}");
+    assert!(touch.is_hard() && r.hard == 1 && r.unseen == 1);
+}
+
+#[test]
+fn a_turn_whose_corner_grazes_a_leg_at_low_speed_is_a_touch_not_a_hard_collision() {
+    let p = quiet_profile();
+    // A 4 cm leg whose edge lies 3 mm inside the circle the body's corners sweep (radius
+    // 0.177 m), on the diagonal; the robot turns slowly (0.5 rad/s, wheels at 24 rpm, just above
+    // the motors' dead band: corners at 9 cm/s, along the leg's surface more than into it).
+    let corner = 0.5 * p.geometry.body_length_m.hypot(p.geometry.body_width_m);
+    let at = (corner + 0.02 - 0.003) / std::f32::consts::SQRT_2;
+    let leg = format!("Circle(center: ({at}, {at}), radius: 0.02)");
+    let mut body = RobotBody::new(&room(&leg), &p, Pose2::new(0.0, 0.0, -0.3), DT);
+    let mut tracker = TouchTracker::new(MecanumKinematics::from_profile(&p));
+    let sp = setpoints(&p, Twist { vx: 0.0, vy: 0.0, omega: 0.5 });
+    let t = drive_tracked(&mut body, &mut tracker, sp, 3.0, 0.0);
+    let r = tracker.report(1, t);
+    assert!(r.count >= 1, "the corner touched the leg: {r:?}");
+    for touch in &r.list {
+        assert!(touch.approach_m_s < 0.1 && touch.push_m < 0.02 && !touch.is_hard(), "{touch:?}");
+    }
+    assert_eq!(r.hard, 0);
 }

@@ -115,6 +115,47 @@ fn a_failing_run_exits_1_and_names_its_rerun_command() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `sweep compare` on two small sweeps of the same room file, the second with a finish limit no
+/// run can meet: every run flips pass → fail, the test of the flips is reported, the figures are
+/// paired, and the link bytes are the same (an expectation changes no byte).
+#[test]
+fn sweep_compare_lists_a_known_flip_and_the_same_link_bytes() {
+    let dir = temp("compare");
+    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
+    let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
+    let robot = scenarios.join("robots/mecanum-4wd.ron").display().to_string();
+    let text = text.replace("\"robots/mecanum-4wd.ron\"", &format!("{robot:?}"));
+    let file = dir.join("room.ron");
+    let file_arg = file.to_str().unwrap();
+    std::fs::write(&file, &text).unwrap();
+    let old = sweep(&[file_arg, "--seeds", "1..2", "--quiet"], &dir.join("old"));
+    assert_eq!(old.status.code(), Some(0), "{}", String::from_utf8_lossy(&old.stderr));
+    std::fs::write(&file, text.replace("finish_within_s: Some(600.0)", "finish_within_s: Some(5.0)"))
+        .unwrap();
+    let new = sweep(&[file_arg, "--seeds", "1..2", "--quiet"], &dir.join("new"));
+    assert_eq!(new.status.code(), Some(1));
+    let summary = std::fs::read_to_string(dir.join("new/summary.md")).unwrap();
+    assert!(summary.starts_with("# Sweep: 0 of 2 (0.0 %, Wilson 95 % 0.0–65.8 %) runs pass"), "{summary}");
+
+    let out =
+        explobot().args(["sweep", "compare"]).arg(dir.join("old")).arg(dir.join("new")).output().unwrap();
+    assert_eq!(out.status.code(), Some(0), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("paired by room and seed: 2 runs (0 only in old, 0 only in new)"), "{text}");
+    assert!(text.contains("- old: 2 of 2 (100.0 %"), "{text}");
+    assert!(
+        text.contains("2 pass → fail, 0 fail → pass; McNemar's exact test p = 0.5000 (not significant"),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("- {file_arg} seed 1: coverage 100.0% → 100.0%; finish_within_s")),
+        "{text}"
+    );
+    assert!(text.contains("| hard collisions | 0 | 0 | +0 |"), "{text}");
+    assert!(text.contains("2 of 2 paired runs with a link-log hash moved the same bytes"), "{text}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn bad_input_exits_2_with_a_clear_message() {
     let dir = temp("bad");

@@ -62,16 +62,7 @@ pub(super) fn finish(
         links: Default::default(),
         faults: Vec::new(),
         mission: vec![Step::StartCartography, Step::WaitUntilMapped],
-        expect: Expectations {
-            coverage_min: Some(0.98),
-            map_accuracy_min: Some(0.95),
-            collisions_max: Some(0),
-            finish_within_s: Some(finish_s),
-            reached: None,
-            position_error_max_m: Some(0.05),
-            heading_error_max_deg: Some(3.0),
-            believed_cell_true: Some(true),
-        },
+        expect: Expectations::from_criteria(&profile.scoring.pass, Some(finish_s)),
     };
     scenario.start = choose_start(&scenario, profile, rng)?;
     Some(GeneratedRoom { style, seed, sub_seed, pieces, scenario })

@@ -295,18 +295,25 @@ impl GeneratedRoom {
         let e = &s.expect;
         let _ = writeln!(
             out,
-            "    expect: (coverage_min: {}, map_accuracy_min: {}, collisions_max: {:?}, finish_within_s: {},",
-            fmt_opt(e.coverage_min),
-            fmt_opt(e.map_accuracy_min),
-            e.collisions_max,
-            fmt_opt(e.finish_within_s.map(|v| format!("{v:.1}")))
+            "    // The robot's pass criteria (its profile's scoring.pass) and this room's time limit."
         );
         let _ = writeln!(
             out,
-            "             position_error_max_m: {}, heading_error_max_deg: {}, believed_cell_true: {:?}),",
-            fmt_opt(e.position_error_max_m),
-            fmt_opt(e.heading_error_max_deg.map(|v| format!("{v:.1}"))),
+            "    expect: (coverage_min: {:?}, map_accuracy_min: {:?}, finish_within_s: {}, believed_cell_true: {:?},",
+            e.coverage_min,
+            e.map_accuracy_min,
+            fmt_opt(e.finish_within_s.map(|v| format!("{v:.1}"))),
             e.believed_cell_true
+        );
+        let _ = writeln!(
+            out,
+            "             touches_max: {:?}, hard_collisions_max: {:?}, touches_per_100_moves_max: {:?},",
+            e.touches_max, e.hard_collisions_max, e.touches_per_100_moves_max
+        );
+        let _ = writeln!(
+            out,
+            "             belief_error_max_m: {:?}, belief_error_p95_max_m: {:?}, belief_heading_error_max_deg: {:?}),",
+            e.belief_error_max_m, e.belief_error_p95_max_m, e.belief_heading_error_max_deg
         );
         let _ = writeln!(out, ")");
         out

@@ -64,12 +64,13 @@ fn every_room_passes_the_check_and_round_trips() {
         assert_eq!(&loaded.scenario, s.room.scenario(), "{label}");
         let sc = s.room.scenario();
         assert_eq!(sc.mission, vec![Step::StartCartography, Step::WaitUntilMapped]);
+        // The default robot's pass criteria, written out in the file (the text round-trips).
+        let pass = RobotProfile::default().scoring.pass;
+        assert_eq!(sc.expect, Expectations::from_criteria(&pass, sc.expect.finish_within_s), "{label}");
         assert_eq!(sc.expect.coverage_min, Some(0.98));
-        assert_eq!(sc.expect.map_accuracy_min, Some(0.95));
-        assert_eq!(sc.expect.collisions_max, Some(0));
-        assert_eq!(sc.expect.position_error_max_m, Some(0.05));
-        assert_eq!(sc.expect.heading_error_max_deg, Some(3.0));
-        assert_eq!(sc.expect.believed_cell_true, Some(true));
+        assert_eq!(sc.expect.hard_collisions_max, Some(0));
+        assert_eq!(sc.expect.belief_error_p95_max_m, Some(0.03));
+        assert_eq!((sc.expect.collisions_max, sc.expect.position_error_max_m), (None, None));
         let area = f64::from(polygon_area(&sc.room).abs());
         let limit = sc.expect.finish_within_s.unwrap();
         assert!(

@@ -11,8 +11,8 @@ impl Lockstep {
     /// The report of the run so far; `wall_time_s` is the caller's measurement.
     pub fn report(&self, wall_time_s: f64) -> Report {
         let scenario = &self.loaded.scenario;
-        let start = (scenario.start.row as usize, scenario.start.col as usize);
-        let map = MapScore::score(&self.truth, start, &self.known_cells());
+        let map = MapScore::score(&self.truth, self.scored_set(), &self.known_cells());
+        let moves = self.cute.cute().counters().moves_sent;
         let pose = self.twin.body().pose();
         let sim_time_s = self.now.as_secs_f64();
         let cute = self.cute.cute();
@@ -38,8 +38,10 @@ impl Lockstep {
             coverage: map.coverage(),
             map_accuracy: map.accuracy(),
             map,
-            moves: cute.counters().moves_sent,
+            moves,
             collisions: self.twin.body().world().collisions(),
+            touches: self.touches.report(moves, sim_time_s),
+            belief: self.belief.report(),
             first_contact: self.first_contact.clone(),
             unphysical: self.twin.body().world().unphysical(),
             final_pose: (f64::from(pose.x), f64::from(pose.y), f64::from(pose.theta.to_degrees())),

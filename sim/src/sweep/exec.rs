@@ -154,6 +154,10 @@ pub fn execute(plan: &Plan, run: Run, timeout_s: Option<f64>) -> Finished {
             for key in ["scenario", "seed", "wall_time_s", "real_time_factor"] {
                 map.remove(key);
             }
+            // Every touch is in the run's report.json; a sweep line keeps their figures only.
+            if let Some(Value::Object(touches)) = map.get_mut("touches") {
+                touches.remove("list");
+            }
             (verdict, reason, map)
         }
         Ok(Err(setup)) => (Verdict::Error, Some(setup), Map::new()),

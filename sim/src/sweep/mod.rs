@@ -25,7 +25,9 @@
 //! input (a scenario file's errors come with file:line:column).
 //!
 //! `explobot sweep merge DIR… --out DIR` joins shard folders into the folder a one-machine run
-//! of the same sweep writes.
+//! of the same sweep writes. `explobot sweep compare OLD NEW` pairs two sweeps' runs by room and
+//! seed ([`compare`]). `summary.md` opens with the pass rate and its Wilson 95 % interval and
+//! gives the continuous figures per scenario or style ([`stats`]).
 //!
 //! ```no_run
 //! use clap::Parser;
@@ -37,11 +39,13 @@
 //! # Ok::<(), sim::sweep::SweepError>(())
 //! ```
 
+pub mod compare;
 pub mod exec;
 pub mod mcap;
 pub mod merge;
 pub mod output;
 pub mod plan;
+pub mod stats;
 
 use std::collections::BTreeMap;
 use std::num::NonZeroUsize;
@@ -96,6 +100,8 @@ pub struct SweepArgs {
 pub enum SweepCommand {
     /// Merge shard folders into the folder a one-machine run of the same sweep writes.
     Merge(merge::MergeArgs),
+    /// Pair the runs of two sweeps by room and seed: flips, McNemar's test, figures, link bytes.
+    Compare(compare::CompareArgs),
 }
 
 /// Arguments of a sweep run.
@@ -140,6 +146,7 @@ impl SweepArgs {
     pub fn run(&self) -> Result<ExitCode, SweepError> {
         match &self.command {
             Some(SweepCommand::Merge(args)) => args.run(),
+            Some(SweepCommand::Compare(args)) => args.run(),
             None => self.sweep.run(),
         }
     }

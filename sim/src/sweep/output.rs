@@ -13,7 +13,10 @@ use serde::Deserialize;
 use super::SweepError;
 use super::exec::Verdict;
 use super::plan::{Manifest, generated_room, group_of, rerun_command};
+use super::stats::{Figures, pass_cell, pass_rate_text};
+use crate::belief::BeliefReport;
 use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
+use crate::touches::TouchReport;
 use crate::world::Unphysical;
 
 /// Most runs listed by name in `summary.md`'s failure tables.
@@ -54,6 +57,18 @@ pub struct RunRecord {
     /// of older binaries).
     #[serde(default)]
     pub unphysical: Option<Unphysical>,
+    /// Moves Cute sent.
+    #[serde(default)]
+    pub moves: Option<u64>,
+    /// The touches' figures (absent in results of older binaries).
+    #[serde(default)]
+    pub touches: Option<TouchReport>,
+    /// Carto's belief against the truth (absent in results of older binaries).
+    #[serde(default)]
+    pub belief: Option<BeliefReport>,
+    /// SHA-256 of every byte on every link: equal for runs with the same bytes.
+    #[serde(default)]
+    pub link_log_sha256: Option<String>,
 }
 
 /// One expectation of a run, as `report.json` has it.
@@ -175,7 +190,7 @@ fn groups(records: &[RunRecord]) -> Vec<(String, Vec<&RunRecord>)> {
 pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
     let passed = records.iter().filter(|r| r.verdict.passed()).count();
     let mut s = String::new();
-    let _ = writeln!(s, "# Sweep: {passed} of {} runs pass\n", records.len());
+    let _ = writeln!(s, "# Sweep: {} runs pass\n", pass_rate_text(passed, records.len()));
     let seeds = manifest
         .seeds
         .as_ref()
@@ -224,6 +239,7 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
             failing.join(", ")
         );
     }
+    figures_table(&mut s, records);
     first_contacts(&mut s, records);
     not_physical_runs(&mut s, records);
     let mut worst: Vec<&RunRecord> = records.iter().filter(|r| !r.verdict.passed()).collect();
@@ -266,11 +282,56 @@ pub fn summary(manifest: &Manifest, records: &[RunRecord]) -> String {
         let _ = writeln!(s, "\n…and {} more in results.jsonl.", worst.len() - MAX_LISTED);
     }
     let _ = writeln!(s, "\n## Re-run a failure\n\n```sh");
+    let oracle = if manifest.known_room {
+        " --known-room"
+    } else if manifest.known_echoes {
+        " --known-echoes"
+    } else {
+        ""
+    };
     for r in worst.iter().take(MAX_LISTED) {
-        let _ = writeln!(s, "{}", rerun_command(&r.room, r.seed));
+        let _ = writeln!(s, "{}{oracle}", rerun_command(&r.room, r.seed));
     }
     let _ = writeln!(s, "```");
     s
+}
+
+/// The "Figures" table: pass rate with its interval and the continuous figures, for all runs and
+/// per scenario or style ([`Figures`]).
+fn figures_table(s: &mut String, records: &[RunRecord]) {
+    let _ = writeln!(s, "\n## Figures\n");
+    let _ = writeln!(
+        s,
+        "Pass rate with its Wilson 95 % interval; touches per 100 moves pooled over the runs; hard \
+         collisions (began at 0.10 m/s or more, or pushed the body 2 cm or more) in all; the median of \
+         each run's 95th-percentile belief error (Carto's belief against the true body); coverage of the \
+         scored set (the cells the robot reaches keeping its clearance), the mean over the runs.\n"
+    );
+    let _ = writeln!(
+        s,
+        "| runs of | runs | pass | touches / 100 moves | no touch | hard collisions (runs) | belief error p95, median | belief error, largest | mean coverage |"
+    );
+    let _ = writeln!(s, "|---|---:|---|---:|---:|---:|---:|---:|---:|");
+    let all = ("all".to_string(), records.iter().collect::<Vec<_>>());
+    let groups = groups(records);
+    let rows = if groups.len() > 1 { std::iter::once(all).chain(groups).collect() } else { vec![all] };
+    for (group, runs) in rows {
+        let f = Figures::of(runs.iter().copied());
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.2} | {} | {} ({}) | {:.3} m | {:.3} m | {:.1}% |",
+            cell(&group),
+            f.runs,
+            pass_cell(f.passed, f.runs),
+            f.touches_per_100_moves,
+            f.runs_without_touch,
+            f.hard_collisions,
+            f.runs_with_hard,
+            f.belief_p95_median_m,
+            f.belief_max_m,
+            100.0 * f.mean_coverage
+        );
+    }
 }
 
 /// The "First contacts" table: how many runs met something first while doing what (see

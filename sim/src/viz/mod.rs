@@ -87,12 +87,22 @@ pub struct RunReport {
     pub sim_time_s: f64,
     /// Lockstep steps.
     pub steps: u64,
-    /// Coverage of reachable cells, 0–1.
+    /// Coverage of the scored set, 0–1.
     pub coverage: f64,
     /// Map accuracy, 0–1.
     pub map_accuracy: f64,
-    /// Collisions.
+    /// Collisions: every touch.
     pub collisions: u32,
+    /// Hard collisions among them (began at 0.10 m/s or more, or pushed the body 2 cm or more).
+    pub hard_collisions: u32,
+    /// Touches nothing in Carto noticed.
+    pub unseen_touches: u32,
+    /// Largest distance between the true body and Carto's belief, metres.
+    pub belief_error_max_m: f64,
+    /// 95th percentile of that distance, metres.
+    pub belief_error_p95_m: f64,
+    /// Largest angle between the true heading and Carto's believed heading, degrees.
+    pub belief_heading_error_max_deg: f64,
     /// SHA-256 of every byte on every link.
     pub link_log_sha256: String,
     /// The whole `report.json`.
@@ -222,6 +232,11 @@ impl Recorder {
                 coverage: r.coverage,
                 map_accuracy: r.map_accuracy,
                 collisions: r.collisions,
+                hard_collisions: r.touches.hard,
+                unseen_touches: r.touches.unseen,
+                belief_error_max_m: r.belief.error_max_m,
+                belief_error_p95_m: r.belief.error_p95_m,
+                belief_heading_error_max_deg: r.belief.heading_error_max_deg,
                 link_log_sha256: r.link_log_sha256.clone(),
                 json: serde_json::to_string(r).unwrap_or_default(),
             };

@@ -158,10 +158,12 @@ pub(super) fn status_bar(
     let mut line2 = String::new();
     if let Some(r) = cache.report.as_ref() {
         line1 += &format!(
-            " | coverage {:.0} % accuracy {:.0} % collisions {}",
+            " | coverage {:.0} % accuracy {:.0} % touches {} ({} hard) belief error {:.1} cm",
             r.coverage * 100.0,
             r.map_accuracy * 100.0,
-            r.collisions
+            r.collisions,
+            r.touches.hard,
+            r.belief.error_max_m * 100.0
         );
         let links: Vec<String> = r
             .links
