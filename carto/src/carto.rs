@@ -16,7 +16,9 @@
 //! - while a board link is down (`on_*_link_lost` until `on_*_link_up`) no move runs and none is
 //!   reported done: the move that was running and every move asked for meanwhile end without
 //!   `MOVE_DONE` (Cute's move timeout fires); positions are still acknowledged;
-//! - repeated warnings (unknown ids, bad frames, moves refused) are rate-limited per kind
+//! - every line logged because of what a client or a board sent (connects and closes, positions,
+//!   STOPs, unknown ids, bad frames and values, moves refused or failed; the pilot's through
+//!   [`crate::pilot::InputNote`]s) is rate-limited per kind and client host
 //!   ([`crate::ratelimit`]): one line, then "N more like this", at most once a second.
 //!
 //! ```
