@@ -43,6 +43,11 @@ impl Backoff {
         self.wait = Duration::from_micros(self.wait.total_micros().saturating_mul(2)).min(self.max);
     }
 
+    /// When the next attempt is due (`None`: at once).
+    pub fn next_attempt(&self) -> Option<Instant> {
+        self.next
+    }
+
     /// The current delay before the next attempt after a failure.
     pub fn current(&self) -> Duration {
         self.wait

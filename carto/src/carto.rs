@@ -16,7 +16,9 @@
 //! - while a board link is down (`on_*_link_lost` until `on_*_link_up`) no move runs and none is
 //!   reported done: the move that was running and every move asked for meanwhile end without
 //!   `MOVE_DONE` (Cute's move timeout fires); positions are still acknowledged;
-//! - repeated warnings (unknown ids, bad frames, moves refused) are rate-limited per kind
+//! - every line logged because of what a client or a board sent (connects and closes, positions,
+//!   STOPs, unknown ids, bad frames and values, moves refused or failed; the pilot's through
+//!   [`crate::pilot::InputNote`]s) is rate-limited per kind and client host
 //!   ([`crate::ratelimit`]): one line, then "N more like this", at most once a second.
 //!
 //! ```
@@ -36,12 +38,12 @@ use protocol::link::GuiMessage;
 use robot_model::time::Instant;
 
 use crate::CartoConfig;
+use crate::log_limited;
 use crate::motor::{Drive, Motor};
 use crate::pilot::{Health, Pilot, Request};
-use crate::ratelimit::RateLimiter;
+use crate::ratelimit::{RateLimiter, host_of, log_suppressed};
 use crate::sensors::{LineTimer, PeerEvent, SensorEvent, SensorState};
 use crate::ultrasound::Ultrasound;
-use crate::warn_limited;
 use crate::wire;
 use robot_model::grid::GridPose;
 
@@ -216,10 +218,11 @@ impl Carto {
     /// departure, is treated as disconnected first.
     pub fn on_client_connected(&mut self, now: Instant, peer: &str) {
         if let Some(old) = self.peer.take() {
-            tracing::warn!(old = %old, "new client while one was connected: dropping the old session");
+            log_limited!(warn, self.limiter, now, "new client while one was connected", host_of(&old),
+                old = %old, "new client while one was connected: dropping the old session");
             self.on_client_disconnected(now);
         }
-        tracing::info!(peer, "client connected");
+        log_limited!(info, self.limiter, now, "client connected", host_of(peer), peer, "client connected");
         self.stats.clients += 1;
         self.link_decoder.reset();
         self.close_client = false;
@@ -231,7 +234,8 @@ impl Carto {
     pub fn on_client_disconnected(&mut self, now: Instant) {
         match self.peer.take() {
             Some(peer) => {
-                tracing::info!(peer = %peer, "client disconnected: motors stopped, pending dropped")
+                log_limited!(info, self.limiter, now, "client disconnected", host_of(&peer),
+                    peer = %peer, "client disconnected: motors stopped, pending dropped");
             }
             None => tracing::debug!("client disconnected (no session)"),
         }
@@ -248,13 +252,14 @@ impl Carto {
             return;
         }
         let peer = self.peer.clone().unwrap_or_else(|| "?".to_owned());
+        let host = host_of(&peer);
         for item in self.link_decoder.feed(bytes) {
             match item {
                 Ok(msg) => {
                     self.stats.client_frames_in += 1;
                     if let GuiMessage::Unknown { msg: id, data } = &msg {
                         self.stats.unknown_messages += 1;
-                        warn_limited!(self.limiter, now, "unknown message", peer = %peer, msg = format_args!("{id:#06x}"), len = data.len(), "unknown message ignored");
+                        log_limited!(warn, self.limiter, now, "unknown message", host, peer = %peer, msg = format_args!("{id:#06x}"), len = data.len(), "unknown message ignored");
                         continue;
                     }
                     tracing::debug!(peer = %peer, ?msg, "request");
@@ -263,21 +268,24 @@ impl Carto {
                         && !(self.motor_link_up && self.sensor_link_up)
                     {
                         self.stats.moves_refused += 1;
-                        warn_limited!(self.limiter, now, "move while a board link is down", peer = %peer, ?msg,
+                        log_limited!(warn, self.limiter, now, "move while a board link is down", host, peer = %peer, ?msg,
                             motor = self.motor_link_up, sensor = self.sensor_link_up,
                             "move dropped, no MOVE_DONE: a board link is down");
                         continue;
                     }
                     if let Request::Ignored { msg: id } = req {
-                        tracing::info!(peer = %peer, msg = format_args!("{id:#06x}"), "message for Cute received by Carto: ignored");
+                        log_limited!(info, self.limiter, now, "message for Cute", host,
+                            peer = %peer, msg = format_args!("{id:#06x}"), "message for Cute received by Carto: ignored");
                     }
                     self.pilot.handle(now, req, &mut self.motor);
+                    self.log_notes(now);
                     self.flush_replies();
                 }
                 Err(e) if e.is_fatal() => {
                     self.stats.protocol_errors += 1;
                     self.stats.fatal_errors += 1;
-                    tracing::error!(peer = %peer, error = %e, "fatal framing error: closing the connection");
+                    log_limited!(error, self.limiter, now, "fatal framing error", host,
+                        peer = %peer, error = %e, "fatal framing error: closing the connection");
                     self.flush_replies();
                     self.close_client = true;
                     self.pilot.on_disconnect(now, &mut self.motor);
@@ -285,7 +293,7 @@ impl Carto {
                 }
                 Err(e) => {
                     self.stats.protocol_errors += 1;
-                    warn_limited!(self.limiter, now, "bad frame", peer = %peer, error = %e, "bad frame skipped");
+                    log_limited!(warn, self.limiter, now, "bad frame", host, peer = %peer, error = %e, "bad frame skipped");
                 }
             }
         }
@@ -395,11 +403,60 @@ impl Carto {
         self.motor.poll(now, &self.sensors);
         let health = self.health();
         self.pilot.poll(now, &mut self.motor, &self.sensors, &self.ultrasound, health);
+        self.log_notes(now);
         self.flush_replies();
         self.flush_motor();
-        for (kind, more) in self.limiter.drain(now) {
-            tracing::warn!(kind, more, "{more} more like this in the last second");
+        log_suppressed(self.limiter.drain(now));
+    }
+
+    /// Logs the pilot's lines about the client's input through the rate limiter.
+    fn log_notes(&mut self, now: Instant) {
+        let notes = self.pilot.take_notes();
+        if notes.is_empty() {
+            return;
         }
+        let peer = self.peer.as_deref().unwrap_or("-");
+        let host = host_of(peer);
+        for n in notes {
+            if n.warn {
+                log_limited!(warn, self.limiter, now, n.kind, host, peer, "{}", n.text);
+            } else {
+                log_limited!(info, self.limiter, now, n.kind, host, peer, "{}", n.text);
+            }
+        }
+    }
+
+    /// The latest time [`Carto::poll`] must next run, for a caller that sleeps between events
+    /// (the binary's event loop): `now` while a move, a task or a drive other than zero is in
+    /// progress (the control loop wants every poll), otherwise the earliest of the keep-state
+    /// cadence, the sensor board's liveness watch, the drive resend cadence and the end of a
+    /// rate-limiter window. Bytes arriving on a link are a reason to poll sooner, which the
+    /// caller sees itself. Read-only: it changes nothing Carto does.
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.pilot.is_busy()
+            || self.motor.is_busy()
+            || self.motor.is_turning(now)
+            || self.motor.command() != Drive::STOP
+        {
+            return now;
+        }
+        let mut next = now + self.cfg.idle_resend_period;
+        let candidates = [
+            self.keep.next_deadline(),
+            self.keep.lost_deadline(),
+            self.motor.next_deadline(),
+            self.limiter.next_deadline(),
+        ];
+        for t in candidates.into_iter().flatten() {
+            next = next.min(t);
+        }
+        next.max(now)
+    }
+
+    /// Link frames seen from the client so far, well-formed or not (the idle limit counts time
+    /// between complete frames).
+    pub fn client_frames_seen(&self) -> u64 {
+        self.stats.client_frames_in + self.stats.protocol_errors
     }
 
     /// The warning limiter, for the caller's own repeated warnings (same kinds, same budget).

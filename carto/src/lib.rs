@@ -4,6 +4,7 @@
 pub mod backoff;
 mod carto;
 pub mod config;
+pub mod fuzzing;
 pub mod motor;
 pub mod odometry;
 pub mod pilot;

@@ -2,16 +2,30 @@
 //! `carto`: the robot controller binary, a thin shell over [`carto::CartoRuntime`] that owns the
 //! wall clock, the signals and the ports.
 //!
-//! Every way it ends stops the motors first (a bare stop frame, drained for at most
-//! [`DRAIN_LIMIT`]), logs why and exits with a documented code:
+//! Every way it ends that a process can catch stops the motors first (a bare stop frame,
+//! drained for at most [`DRAIN_LIMIT`]), logs why and exits with a documented code. Every signal
+//! whose default action ends a process and that may be caught ([`stop_signals`]: SIGTERM,
+//! SIGINT, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM, SIGPROF, SIGIO, SIGPWR,
+//! SIGSTKFLT, SIGXCPU, SIGXFSZ, SIGSYS, SIGTRAP, SIGABRT and the real-time signals) only sets a
+//! flag and wakes the loop; SIGPIPE is ignored (Rust's runtime does so), so a write to a closed
+//! socket is an error that ends that session, not Carto. SIGKILL and SIGSTOP cannot be caught:
+//! then the motor board's own watchdog stops the wheels (README, "Signals and SIGKILL").
+//!
+//! The loop sleeps in `poll(2)` on the board links, the listener, the client and the signal
+//! pipe, until a byte arrives or Carto's next deadline ([`CartoRuntime::next_deadline`]): every
+//! millisecond while a move runs, as before, and up to the next keep-state or resend when idle.
 //!
 //! | code | why |
 //! |---|---|
 //! | 0 | SIGTERM, SIGINT or SIGHUP |
+//! | 128 + N | any other caught signal N (SIGQUIT 131, SIGUSR1 138, …), after the same stop |
 //! | 1 | a fatal error while running (a board link lost with `--exit-on-link-loss`, the listener failing) |
 //! | 2 | it could not start: bad arguments, unreadable profile, address not available (with `--exit-on-link-loss`, a board port that does not open) |
 //! | 3 | an internal error (a panic) |
 
+use std::io::Read;
+use std::os::fd::{AsFd, BorrowedFd};
+use std::os::unix::net::UnixStream;
 use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -23,15 +37,21 @@ use anyhow::{Context, Result, bail};
 use carto::backoff::Backoff;
 use carto::{Carto, CartoConfig, CartoRuntime};
 use clap::{Parser, ValueEnum};
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use robot_model::profile::RobotProfile;
 use robot_model::time::{Duration, Instant};
-use transport::{Clock, DynLink, KeepAlive, SerialLink, TcpLink, TcpListenerLink, WallClock};
+use transport::{Clock, KeepAlive, Link, SerialLink, TcpLink, TcpListenerLink, WallClock};
 
 const DEFAULT_PROFILE: &str = "scenarios/robots/mecanum-4wd.ron";
 /// Longest wait for the stop frame to leave on the way out.
 const DRAIN_LIMIT: StdDuration = StdDuration::from_millis(200);
 /// Longest a reconnection to a board over TCP may block the loop.
 const BOARD_CONNECT_TIMEOUT: StdDuration = StdDuration::from_millis(200);
+
+/// Longest the loop sleeps when nothing is due (a bound, not a cadence).
+const MAX_WAIT: StdDuration = StdDuration::from_secs(1);
+/// Bytes read and discarded from a client closed after a protocol error, so it sees a clean close.
+const DRAIN_ON_CLOSE: usize = 1 << 20;
 
 const EXIT_FATAL: u8 = 1;
 const EXIT_START: u8 = 2;
@@ -108,15 +128,33 @@ fn main() -> ExitCode {
         default_hook(info);
     }));
     let args = Args::parse();
-    // Signals first: from here on SIGTERM, SIGINT and SIGHUP only set this flag.
+    // Signals first: from here on every catchable terminating signal only sets this flag and
+    // writes a byte to the wake pipe that the loop polls.
     let signal = Arc::new(AtomicUsize::new(0));
-    for sig in [signal_hook::consts::SIGTERM, signal_hook::consts::SIGINT, signal_hook::consts::SIGHUP] {
-        if let Err(e) = signal_hook::flag::register_usize(sig, Arc::clone(&signal), sig as usize) {
-            eprintln!("carto: error: cannot install the handler of signal {sig}: {e}");
+    let (wake_rx, wake_tx) = match UnixStream::pair().and_then(|(rx, tx)| {
+        rx.set_nonblocking(true)?;
+        tx.set_nonblocking(true)?;
+        Ok((rx, tx))
+    }) {
+        Ok(pair) => pair,
+        Err(e) => {
+            eprintln!("carto: error: cannot create the signal pipe: {e}");
+            return ExitCode::from(EXIT_START);
+        }
+    };
+    for sig in stop_signals() {
+        let installed = signal_hook::flag::register_usize(sig, Arc::clone(&signal), sig as usize)
+            .and_then(|_| wake_tx.try_clone())
+            .and_then(|tx| signal_hook::low_level::pipe::register(sig, tx));
+        if let Err(e) = installed {
+            eprintln!(
+                "carto: error: cannot install the handler of signal {}: {e}",
+                signal_name(sig as usize)
+            );
             return ExitCode::from(EXIT_START);
         }
     }
-    let mut daemon = match Daemon::start(args, signal) {
+    let mut daemon = match Daemon::start(args, signal, wake_rx) {
         Ok(d) => d,
         Err(e) => {
             eprintln!("carto: error: {e:#}");
@@ -126,7 +164,7 @@ fn main() -> ExitCode {
     };
     let outcome = std::panic::catch_unwind(AssertUnwindSafe(|| daemon.serve()));
     let (why, code, emergency) = match outcome {
-        Ok(Ended::Signal(sig)) => (format!("signal {}", signal_name(sig)), 0, false),
+        Ok(Ended::Signal(sig)) => (format!("signal {}", signal_name(sig)), signal_exit_code(sig), false),
         Ok(Ended::Fatal(why)) => (why, EXIT_FATAL, false),
         Err(_) => ("internal error (panic)".to_owned(), EXIT_PANIC, true),
     };
@@ -138,12 +176,58 @@ fn main() -> ExitCode {
     ExitCode::from(code)
 }
 
+/// Every signal whose default action ends the process and that a process may catch: each goes
+/// through the stop path. Not here: SIGKILL and SIGSTOP (cannot be caught), SIGSEGV, SIGBUS,
+/// SIGILL and SIGFPE (faults of Carto itself: signal-hook refuses them; a Rust panic is handled
+/// instead), SIGPIPE (ignored by Rust's runtime: a write to a closed socket fails and ends that
+/// session only), and the signals whose default is to stop, continue or be ignored.
+fn stop_signals() -> Vec<i32> {
+    use nix::libc;
+    let mut sigs = vec![
+        libc::SIGTERM,
+        libc::SIGINT,
+        libc::SIGHUP,
+        libc::SIGQUIT,
+        libc::SIGUSR1,
+        libc::SIGUSR2,
+        libc::SIGALRM,
+        libc::SIGVTALRM,
+        libc::SIGPROF,
+        libc::SIGIO,
+        libc::SIGXCPU,
+        libc::SIGXFSZ,
+        libc::SIGSYS,
+        libc::SIGTRAP,
+        libc::SIGABRT,
+    ];
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    sigs.extend([libc::SIGPWR, libc::SIGSTKFLT]);
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    sigs.extend(libc::SIGRTMIN()..=libc::SIGRTMAX());
+    sigs
+}
+
 fn signal_name(sig: usize) -> String {
+    let Ok(n) = i32::try_from(sig) else {
+        return sig.to_string();
+    };
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    if (nix::libc::SIGRTMIN()..=nix::libc::SIGRTMAX()).contains(&n) {
+        return format!("SIGRTMIN+{}", n - nix::libc::SIGRTMIN());
+    }
+    match signal_hook::low_level::signal_name(n) {
+        Some(name) => name.to_owned(),
+        None => sig.to_string(),
+    }
+}
+
+/// 0 for the signals that ask for an orderly stop (SIGTERM, SIGINT, SIGHUP), 128 + N for the
+/// others, as a shell reports a death by signal N: a supervisor can tell them apart.
+fn signal_exit_code(sig: usize) -> u8 {
     match i32::try_from(sig) {
-        Ok(signal_hook::consts::SIGTERM) => "SIGTERM".to_owned(),
-        Ok(signal_hook::consts::SIGINT) => "SIGINT".to_owned(),
-        Ok(signal_hook::consts::SIGHUP) => "SIGHUP".to_owned(),
-        _ => sig.to_string(),
+        Ok(signal_hook::consts::SIGTERM | signal_hook::consts::SIGINT | signal_hook::consts::SIGHUP) => 0,
+        Ok(n) => u8::try_from(128 + n).unwrap_or(u8::MAX),
+        Err(_) => u8::MAX,
     }
 }
 
@@ -189,16 +273,49 @@ struct Board {
     down_logged: bool,
 }
 
+/// A board link the loop can wait on: a serial port (or the twin's pty) or a TCP connection.
+enum BoardLink {
+    Serial(SerialLink),
+    Tcp(TcpLink),
+}
+
+impl Link for BoardLink {
+    type Error = transport::Error;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, transport::Error> {
+        match self {
+            BoardLink::Serial(l) => l.read(buf),
+            BoardLink::Tcp(l) => l.read(buf),
+        }
+    }
+
+    fn write(&mut self, buf: &[u8]) -> Result<usize, transport::Error> {
+        match self {
+            BoardLink::Serial(l) => l.write(buf),
+            BoardLink::Tcp(l) => l.write(buf),
+        }
+    }
+}
+
+impl AsFd for BoardLink {
+    fn as_fd(&self) -> BorrowedFd<'_> {
+        match self {
+            BoardLink::Serial(l) => l.as_fd(),
+            BoardLink::Tcp(l) => l.as_fd(),
+        }
+    }
+}
+
 impl Board {
-    fn open(&self, connect_timeout: StdDuration) -> Result<DynLink> {
+    fn open(&self, connect_timeout: StdDuration) -> Result<BoardLink> {
         let (which, port, baud) = (self.which, self.port.as_str(), self.baud);
         Ok(match self.kind {
-            TransportKind::Sim | TransportKind::Serial => Box::new(
+            TransportKind::Sim | TransportKind::Serial => BoardLink::Serial(
                 SerialLink::builder(port, baud)
                     .open()
                     .with_context(|| format!("cannot open the {which} board port {port} ({baud} baud)"))?,
             ),
-            TransportKind::Tcp => Box::new(
+            TransportKind::Tcp => BoardLink::Tcp(
                 TcpLink::connect_timeout(port, connect_timeout)
                     .with_context(|| format!("cannot connect to the {which} board at {port}"))?,
             ),
@@ -207,15 +324,17 @@ impl Board {
 }
 
 struct Daemon {
-    rt: CartoRuntime<TcpListenerLink, DynLink, DynLink>,
+    rt: CartoRuntime<TcpListenerLink, BoardLink, BoardLink>,
     clock: WallClock,
     boards: [Board; 2],
     signal: Arc<AtomicUsize>,
+    /// Read end of the pipe every stop signal writes a byte to: wakes `poll`.
+    wake: UnixStream,
     exit_on_link_loss: bool,
 }
 
 impl Daemon {
-    fn start(args: Args, signal: Arc<AtomicUsize>) -> Result<Daemon> {
+    fn start(args: Args, signal: Arc<AtomicUsize>, wake: UnixStream) -> Result<Daemon> {
         let profile = load_profile(args.profile.as_deref())?;
         let mut cfg = CartoConfig::from_profile(&profile);
         if let Some(cell) = args.cell {
@@ -283,8 +402,9 @@ impl Daemon {
             dead_after_s = cfg.client_dead_after.map(|d| d.as_secs_f64()),
             "carto ready: waiting for Cute"
         );
-        let rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
-        Ok(Daemon { rt, clock, boards, signal, exit_on_link_loss: args.exit_on_link_loss })
+        let mut rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
+        rt.set_drain_on_close(DRAIN_ON_CLOSE);
+        Ok(Daemon { rt, clock, boards, signal, wake, exit_on_link_loss: args.exit_on_link_loss })
     }
 
     /// Serves until a signal or a fatal error.
@@ -297,6 +417,7 @@ impl Daemon {
             }
             let now = self.clock.now();
             let report = self.rt.step(now);
+            let waiting = report.waiting;
             for (lost, b) in [(report.motor_lost, 0), (report.sensor_lost, 1)] {
                 if !lost {
                     continue;
@@ -317,8 +438,57 @@ impl Daemon {
                 next_status = now + Duration::from_secs(10);
                 tracing::debug!(status = ?self.rt.carto().status(), stats = ?self.rt.carto().stats(), "status");
             }
+            self.wait(next_status, waiting);
+        }
+    }
+
+    /// Sleeps until a link, the listener or the signal pipe is readable, or until the next
+    /// deadline: Carto's ([`CartoRuntime::next_deadline`]: 1 ms while its control loop runs, as
+    /// the loop's old fixed sleep), a board reopening, or the status line.
+    fn wait(&mut self, next_status: Instant, waiting: bool) {
+        let now = self.clock.now();
+        let mut deadline = self.rt.next_deadline(now).min(next_status);
+        for (i, b) in self.boards.iter().enumerate() {
+            let up = if i == 0 { self.rt.motor_up() } else { self.rt.sensor_up() };
+            if !up {
+                deadline = deadline.min(b.backoff.next_attempt().unwrap_or(now));
+            }
+        }
+        let micros = deadline.saturating_since(now).total_micros();
+        // At least 1 ms, the old loop's cadence; rounded up so the deadline has passed on waking.
+        let wait = StdDuration::from_micros(micros.div_ceil(1000) * 1000)
+            .clamp(StdDuration::from_millis(1), MAX_WAIT);
+        let timeout = PollTimeout::try_from(wait).unwrap_or(PollTimeout::ZERO);
+        let readable = PollFlags::POLLIN;
+        let mut fds = Vec::with_capacity(5);
+        fds.push(PollFd::new(self.wake.as_fd(), readable));
+        if let Some(l) = self.rt.motor_link() {
+            fds.push(PollFd::new(l.as_fd(), readable));
+        }
+        if let Some(l) = self.rt.sensor_link() {
+            fds.push(PollFd::new(l.as_fd(), readable));
+        }
+        match self.rt.client_link() {
+            Some(c) => {
+                fds.push(PollFd::new(c.as_fd(), readable));
+                // A client waiting in the backlog keeps the listener readable: watch it only
+                // until the runtime has noticed that client.
+                if !waiting {
+                    fds.push(PollFd::new(self.rt.listener().as_fd(), readable));
+                }
+            }
+            None => fds.push(PollFd::new(self.rt.listener().as_fd(), readable)),
+        }
+        if let Err(e) = poll(&mut fds, timeout)
+            && e != nix::errno::Errno::EINTR
+        {
+            // Never spin on a broken poll: fall back to the old fixed sleep.
+            tracing::debug!(error = %e, "poll failed");
             std::thread::sleep(StdDuration::from_millis(1));
         }
+        drop(fds);
+        let mut sink = [0u8; 64];
+        while matches!(self.wake.read(&mut sink), Ok(n) if n > 0) {}
     }
 
     fn reopen_boards(&mut self, now: Instant) {

@@ -317,6 +317,20 @@ impl Activity {
     }
 }
 
+/// A line about the client's input (a position, a STOP, a bad value) that the pilot wants
+/// logged. The pilot does not log these itself: [`crate::Carto`] takes them with
+/// [`Pilot::take_notes`] and logs them through its rate limiter, per kind and client, so a flood
+/// of frames cannot flood the log.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputNote {
+    /// The rate limiter's kind (a constant per call site).
+    pub kind: &'static str,
+    /// A warning (bad input) rather than information.
+    pub warn: bool,
+    /// The line.
+    pub text: String,
+}
+
 /// The link session's state machine (see the module docs).
 #[derive(Debug, Clone)]
 pub struct Pilot {
@@ -330,6 +344,7 @@ pub struct Pilot {
     stage: Stage,
     rest_since: Instant,
     replies: Vec<Reply>,
+    notes: Vec<InputNote>,
     counters: PilotCounters,
     safety: Safety,
     surroundings: Surroundings,
@@ -377,6 +392,7 @@ impl Pilot {
             stage: Stage::Next,
             rest_since: Instant::ZERO,
             replies: Vec::new(),
+            notes: Vec::new(),
             counters: PilotCounters::default(),
             safety: Safety::new(cfg),
             surroundings: Surroundings::default(),
@@ -454,6 +470,15 @@ impl Pilot {
         core::mem::take(&mut self.replies)
     }
 
+    /// Lines about the client's input since the last call, in order ([`InputNote`]).
+    pub fn take_notes(&mut self) -> Vec<InputNote> {
+        core::mem::take(&mut self.notes)
+    }
+
+    fn note(&mut self, kind: &'static str, warn: bool, text: String) {
+        self.notes.push(InputNote { kind, warn, text });
+    }
+
     /// Handles one request from Cute.
     pub fn handle(&mut self, now: Instant, req: Request, motor: &mut Motor) {
         match req {
@@ -461,7 +486,11 @@ impl Pilot {
                 match direction {
                     Ok(heading) => {
                         let pose = GridPose { x, y, heading };
-                        tracing::info!(%pose, "robot position received");
+                        self.note(
+                            "robot position received",
+                            false,
+                            format!("robot position received: {pose}"),
+                        );
                         // A new pose names a cell: the robot is taken to be at its centre. The
                         // pose Carto already holds (Cute re-sends it after a reconnect) keeps the
                         // dead-reckoned offset, e.g. of a FORWARD cut short by the disconnect, so
@@ -482,11 +511,12 @@ impl Pilot {
                     }
                     Err(direction) => {
                         self.counters.bad_values += 1;
-                        tracing::warn!(
-                            x,
-                            y,
-                            direction,
-                            "robot position with an invalid direction: not stored"
+                        self.note(
+                            "robot position with an invalid direction",
+                            true,
+                            format!(
+                                "robot position ({x}, {y}) with an invalid direction {direction}: not stored"
+                            ),
                         );
                     }
                 }
@@ -498,7 +528,8 @@ impl Pilot {
             }
             Request::Trajectory { n_total, command } => self.trajectory_frame(n_total, command),
             Request::Stop => {
-                tracing::info!(dropped = self.pending(), "stop: motors stopped, pending commands dropped");
+                let dropped = self.pending();
+                self.note("stop", false, format!("stop: motors stopped, {dropped} pending commands dropped"));
                 self.drop_everything(now, motor);
             }
             Request::Ignored { msg } => {
@@ -510,7 +541,11 @@ impl Pilot {
     fn trajectory_frame(&mut self, n_total: u8, command: Result<Move, u8>) {
         if n_total == 0 {
             self.counters.bad_values += 1;
-            tracing::warn!(?command, "trajectory frame with n_total 0 ignored");
+            self.note(
+                "trajectory frame with n_total 0",
+                true,
+                format!("trajectory frame with n_total 0 ignored (command {command:?})"),
+            );
             return;
         }
         let batch = match self.batch.take() {
@@ -520,18 +555,24 @@ impl Pilot {
             }
             Some((n, cmds)) => {
                 self.counters.batches_discarded += 1;
-                tracing::warn!(
-                    old = n,
-                    got = cmds.len(),
-                    new = n_total,
-                    "n_total changed: partial batch discarded"
+                self.note(
+                    "n_total changed",
+                    true,
+                    format!(
+                        "n_total changed from {n} to {n_total}: partial batch of {} discarded",
+                        cmds.len()
+                    ),
                 );
                 (n_total, vec![command])
             }
             None => (n_total, vec![command]),
         };
         if batch.1.len() >= usize::from(batch.0) {
-            tracing::info!(n = batch.0, "trajectory batch complete");
+            self.note(
+                "trajectory batch complete",
+                false,
+                format!("trajectory batch of {} complete", batch.0),
+            );
             self.queue.push_back(Task { kind: TaskKind::Trajectory, commands: batch.1.into() });
         } else {
             self.batch = Some(batch);
@@ -626,7 +667,7 @@ impl Pilot {
     }
 
     fn fail(&mut self, now: Instant, why: &str) {
-        tracing::warn!(why, "move cannot run: task ends with MOVE_DONE only");
+        self.note("move cannot run", true, format!("move cannot run ({why}): task ends with MOVE_DONE only"));
         self.counters.moves_failed += 1;
         self.end_task(now);
     }
@@ -701,7 +742,11 @@ impl Pilot {
                         }
                         Check::Pending => return,
                         Check::Obstacle { cm } => {
-                            tracing::info!(cm, "obstacle ahead: no motion");
+                            self.note(
+                                "obstacle ahead",
+                                false,
+                                format!("obstacle ahead at {cm} cm: no motion"),
+                            );
                             if !sensors.bumper_pressed() {
                                 self.along_fix(Some(cm), motor);
                             }

@@ -10,7 +10,8 @@
 //! 3. polls Carto;
 //! 4. writes Carto's output, keeping what a link did not take for the next step;
 //! 5. closes the client after a fatal framing error, or after
-//!    [`crate::CartoConfig::client_idle_limit`] without a byte from it.
+//!    [`crate::CartoConfig::client_idle_limit`] without a complete frame from it (bytes that
+//!    trickle in without completing a frame do not keep the session open).
 //!
 //! A client's close is therefore always read before the next connection is looked at, so a
 //! client that reconnects at once is served, never reset.
@@ -39,7 +40,8 @@ use transport::{Link, LinkError, Listener};
 
 use crate::Carto;
 use crate::motor::Drive;
-use crate::warn_limited;
+use crate::ratelimit::host_of;
+use crate::{log_limited, warn_limited};
 
 /// Unsent bytes kept per board link before the backlog is dropped.
 pub const MAX_BOARD_BACKLOG: usize = 4096;
@@ -92,7 +94,10 @@ struct Client<C> {
     link: C,
     peer: String,
     out: Vec<u8>,
-    last_rx: Instant,
+    /// When the last complete frame (or the connection) arrived: what the idle limit counts from.
+    last_frame: Instant,
+    /// [`Carto::client_frames_seen`] at `last_frame`.
+    frames_seen: u64,
 }
 
 /// Carto plus its links (see the module docs).
@@ -108,6 +113,8 @@ pub struct CartoRuntime<L: Listener, M: Link, S: Link> {
     buf: Vec<u8>,
     /// A client is known to wait in the backlog (logged once).
     waiting: bool,
+    /// Bytes read and discarded from a client closed after a protocol error (0: none).
+    drain_on_close: usize,
 }
 
 impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
@@ -130,6 +137,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             stats: RuntimeStats::default(),
             buf: vec![0; READ_CHUNK],
             waiting: false,
+            drain_on_close: 0,
         };
         match motor {
             Some(m) => rt.motor = Some(m),
@@ -156,6 +164,13 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         self.carto.on_sensor_link_up(now);
     }
 
+    /// Before closing a client after a protocol error, read and discard up to `limit` bytes it
+    /// already sent, so that the close is a clean TCP FIN rather than a reset (a socket closed
+    /// with unread data resets the connection). Off (0) by default; the binary sets it.
+    pub fn set_drain_on_close(&mut self, limit: usize) {
+        self.drain_on_close = limit;
+    }
+
     /// The controller.
     pub fn carto(&self) -> &Carto {
         &self.carto
@@ -174,6 +189,43 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
     /// The sensor board link, while it is up.
     pub fn sensor_link(&self) -> Option<&S> {
         self.sensor.as_ref()
+    }
+
+    /// The listener (e.g. for a caller that waits on its socket).
+    pub fn listener(&self) -> &L {
+        &self.listener
+    }
+
+    /// The client's link while a session is open (e.g. for a caller that waits on its socket).
+    pub fn client_link(&self) -> Option<&L::Link> {
+        self.client.as_ref().map(|c| &c.link)
+    }
+
+    /// Whether bytes wait to be written to a link that did not take them all.
+    pub fn has_pending_output(&self) -> bool {
+        !self.motor_out.is_empty()
+            || !self.sensor_out.is_empty()
+            || self.client.as_ref().is_some_and(|c| !c.out.is_empty())
+    }
+
+    /// Bytes held for the links that did not take them yet (bounded: see the module docs).
+    pub fn buffered_bytes(&self) -> usize {
+        self.motor_out.len() + self.sensor_out.len() + self.client.as_ref().map_or(0, |c| c.out.len())
+    }
+
+    /// The latest time [`CartoRuntime::step`] must next run if no byte arrives before: `now`
+    /// while output waits or Carto's control loop runs, else the earliest of
+    /// [`Carto::next_deadline`] and the client's idle limit. Read-only, for a caller that sleeps
+    /// between events; a caller stepping at a fixed rate (the lockstep runner) ignores it.
+    pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.has_pending_output() {
+            return now;
+        }
+        let mut next = self.carto.next_deadline(now);
+        if let (Some(limit), Some(c)) = (self.carto.config().client_idle_limit, self.client.as_ref()) {
+            next = next.min(c.last_frame + limit);
+        }
+        next.max(now)
     }
 
     /// The runtime's counters.
@@ -202,15 +254,16 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         self.accept(now, &mut report);
         self.read_client(now, &mut report);
         if let (Some(limit), Some(c)) = (self.carto.config().client_idle_limit, self.client.as_ref())
-            && now.saturating_since(c.last_rx) >= limit
+            && now.saturating_since(c.last_frame) >= limit
         {
-            let why = format!("idle limit: no byte for {:.1} s", limit.as_secs_f64());
+            let why = format!("idle limit: no complete frame for {:.1} s", limit.as_secs_f64());
             self.close_client(now, &why, &mut report);
         }
         self.read_boards(now, &mut report);
         self.carto.poll(now);
         self.write_all(now, &mut report);
         if self.client.is_some() && self.carto.should_close_client() {
+            self.drain_client();
             self.close_client(now, "protocol error", &mut report);
         }
         report
@@ -260,9 +313,28 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             if !c.out.is_empty() {
                 let _ = c.link.write(&c.out);
             }
-            tracing::info!(peer = %c.peer, why, "closing client connection");
+            log_limited!(info, self.carto.limiter(), now, "client closed", host_of(&c.peer),
+                peer = %c.peer, why, "closing client connection");
             report.client_closed = true;
             self.carto.on_client_disconnected(now);
+        }
+    }
+
+    /// Reads and discards what the client already sent, up to [`Self::set_drain_on_close`]'s
+    /// limit.
+    fn drain_client(&mut self) {
+        let Some(c) = self.client.as_mut() else {
+            return;
+        };
+        let mut left = self.drain_on_close;
+        while left > 0 {
+            match c.link.read(&mut self.buf) {
+                Ok(n) if n > 0 => {
+                    self.stats.client_bytes_in += n as u64;
+                    left = left.saturating_sub(n);
+                }
+                _ => break,
+            }
         }
     }
 
@@ -272,7 +344,8 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             if !self.waiting && self.listener.has_pending() {
                 self.waiting = true;
                 self.stats.waited += 1;
-                tracing::info!(current = %current.peer, "another client waits in the backlog: served when this session ends");
+                log_limited!(info, self.carto.limiter(), now, "client waits", host_of(&current.peer),
+                    current = %current.peer, "another client waits in the backlog: served when this session ends");
             }
             report.waiting = self.waiting;
             return;
@@ -280,11 +353,13 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         match self.listener.accept() {
             Ok(Some((link, peer))) => {
                 if std::mem::take(&mut self.waiting) {
-                    tracing::info!(peer = %peer, "serving the client that waited in the backlog");
+                    log_limited!(info, self.carto.limiter(), now, "waiting client served", host_of(&peer),
+                        peer = %peer, "serving the client that waited in the backlog");
                 }
                 self.carto.on_client_connected(now, &peer);
                 report.accepted = Some(peer.clone());
-                self.client = Some(Client { link, peer, out: Vec::new(), last_rx: now });
+                let frames_seen = self.carto.client_frames_seen();
+                self.client = Some(Client { link, peer, out: Vec::new(), last_frame: now, frames_seen });
             }
             Ok(None) => {}
             Err(e) => {
@@ -304,8 +379,12 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                 Ok(0) => break,
                 Ok(n) => {
                     self.stats.client_bytes_in += n as u64;
-                    client.last_rx = now;
                     self.carto.on_client_bytes(now, &self.buf[..n]);
+                    let seen = self.carto.client_frames_seen();
+                    if seen != client.frames_seen {
+                        client.frames_seen = seen;
+                        client.last_frame = now;
+                    }
                     if self.carto.should_close_client() {
                         break;
                     }

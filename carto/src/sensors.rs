@@ -619,6 +619,16 @@ impl KeepState {
     pub fn next_deadline(&self) -> Option<Instant> {
         self.next_send
     }
+
+    /// When `poll` would declare the board lost if nothing is heard before (`None`: already
+    /// lost, or not watching yet).
+    pub fn lost_deadline(&self) -> Option<Instant> {
+        if self.lost {
+            return None;
+        }
+        let since = self.watch_since?;
+        Some(self.last_heard.unwrap_or(since) + self.lost_after)
+    }
 }
 
 #[cfg(test)]

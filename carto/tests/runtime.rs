@@ -247,3 +247,81 @@ fn stop_motors_sends_a_zero_drive() {
     );
     let _ = t;
 }
+
+/// A runtime with a 2 s idle limit and silent boards, and a connected client.
+fn idle_limited() -> (CartoRuntime<MemListener, MemLink, MemLink>, MemLink, [MemLink; 2]) {
+    let clock = MockClock::new();
+    let (listener, mut connector) = mem_listener(None, clock.clone());
+    let (m_carto, m_board) = MemLink::pair(None, clock.clone());
+    let (s_carto, s_board) = MemLink::pair(None, clock);
+    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..fake::test_config() };
+    let rt = CartoRuntime::new(Carto::new(cfg), listener, m_carto, s_carto);
+    let client = connector.connect().unwrap();
+    (rt, client, [m_board, s_board])
+}
+
+#[test]
+fn issue_45_a_client_trickling_a_frame_is_closed_by_the_idle_limit() {
+    let (mut rt, mut trickler, _boards) = idle_limited();
+    // A 1,000-byte frame (Size 1000 ≤ max_frame 1024), one byte every 300 ms: bytes keep coming,
+    // but no frame completes, so the session ends 2 s after it opened.
+    let mut frame = vec![0x03, 0xE8, 0x07, 0x00];
+    frame.resize(1002, 0x55);
+    let mut now = Instant::ZERO;
+    let mut closed_at = None;
+    let mut sent = 0;
+    while now < Instant::from_millis(10_000) && closed_at.is_none() {
+        now += Duration::from_millis(10);
+        if now.total_millis().is_multiple_of(300) && sent < frame.len() {
+            trickler.write(&frame[sent..=sent]).unwrap();
+            sent += 1;
+        }
+        if rt.step(now).client_closed {
+            closed_at = Some(now);
+        }
+    }
+    assert_eq!(closed_at, Some(Instant::from_millis(2010)), "{sent} bytes trickled");
+    let mut buf = [0u8; 8];
+    assert!(trickler.read(&mut buf).unwrap_err().is_disconnected());
+}
+
+#[test]
+fn issue_45_complete_frames_keep_the_session_and_a_partial_one_does_not_extend_it() {
+    let (mut rt, mut client, _boards) = idle_limited();
+    let pose = pose_bytes();
+    let mut now = Instant::ZERO;
+    let mut closed_at = None;
+    while now < Instant::from_millis(20_000) && closed_at.is_none() {
+        now += Duration::from_millis(10);
+        let ms = now.total_millis();
+        // A complete position every 1.5 s for 6 s: the session stays open.
+        if ms <= 6000 && ms.is_multiple_of(1500) {
+            client.write(&pose).unwrap();
+        }
+        // Then the first byte of a position at 7 s and one more at 7.5 s: no frame completes.
+        if ms == 7000 || ms == 7500 {
+            client.write(&pose[(ms as usize - 7000) / 500..=(ms as usize - 7000) / 500]).unwrap();
+        }
+        if rt.step(now).client_closed {
+            closed_at = Some(now);
+        }
+    }
+    // The last complete frame came at 6 s: closed at 8 s, the partial frame notwithstanding.
+    assert_eq!(closed_at, Some(Instant::from_millis(8000)));
+}
+
+#[test]
+fn issue_45_next_deadline_is_now_while_moving_and_later_when_idle() {
+    let mut w = World::new(false);
+    let mut c = w.connector.connect().unwrap();
+    w.run_ms(500);
+    let idle = w.rt.next_deadline(w.now);
+    assert!(idle > w.now, "an idle runtime has nothing due now");
+    assert!(idle <= w.now + Duration::from_millis(500), "keep-state and resend run at 2 Hz");
+    c.write(&pose_bytes()).unwrap();
+    c.write(&GuiMessage::SendMoveCartography { command: Command::Forward }.to_bytes(MsgOrder::BigEndian))
+        .unwrap();
+    w.run_ms(200);
+    assert!(w.robot.moving());
+    assert_eq!(w.rt.next_deadline(w.now), w.now, "the control loop wants every poll while moving");
+}

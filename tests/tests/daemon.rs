@@ -1,4 +1,4 @@
-//! Carto as a robot daemon (issues 14 and 15), each test against the real `carto` binary and the
+//! Carto as a robot daemon (issues 14, 15 and 45), each test against the real `carto` binary and the
 //! twin served in real time (`explobot sim --serve --tcp`): signals stop the motors, a twin that
 //! dies and comes back is reconnected to, clients that reconnect at once or wait their turn are
 //! served, a silent client is dropped, a flood of unknown ids stays out of the log, and a profile
@@ -324,4 +324,262 @@ fn issue_15_dev_zero_and_a_fifo_as_profile_are_clear_errors_within_1_s() {
         assert!(stderr.contains("not a regular file"), "{}: {stderr}", profile.display());
         assert!(took < Duration::from_secs(1), "{}: took {took:?}", profile.display());
     }
+}
+
+/// Signal numbers on Linux, by the names `kill` takes.
+const SIGNALS_THAT_STOP: [(&str, i32); 16] = [
+    ("QUIT", 3),
+    ("USR1", 10),
+    ("USR2", 12),
+    ("ALRM", 14),
+    ("TRAP", 5),
+    ("ABRT", 6),
+    ("STKFLT", 16),
+    ("XCPU", 24),
+    ("XFSZ", 25),
+    ("VTALRM", 26),
+    ("PROF", 27),
+    ("IO", 29),
+    ("PWR", 30),
+    ("SYS", 31),
+    ("34", 34), // SIGRTMIN
+    ("64", 64), // SIGRTMAX
+];
+
+/// Starts Carto through a motor tap on `twin`, starts a turn on the spot (safe to repeat in the
+/// one twin), sends `sig` mid-turn, and checks that the zero drive went out after the signal,
+/// within 100 ms, and before exit, through the stop path. The exit code.
+fn signal_stops_the_motors(dir: &TempDir, twin: &Twin, sig: &str) -> Result<Option<i32>, String> {
+    let (tap_port, tap) = motor_tap(twin.base);
+    let mut carto = Carto::start(dir, tap_port, twin.base + 1, &[]);
+    let mut c = carto.client();
+    c.send(GuiMessage::SendRobotPosition { x: 2, y: 2, direction: Direction::East });
+    c.read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20));
+    c.send(GuiMessage::SendMoveCartography { command: Cmd::Right });
+    wait_for(&format!("SIG{sig}: a turning drive frame"), Duration::from_secs(20), || {
+        drives(&tap).iter().any(|(_, d)| d.2 != 0).then_some(())
+    });
+    std::thread::sleep(Duration::from_millis(200));
+    if drives(&tap).last().is_some_and(|(_, d)| *d == (0, 0, 0)) {
+        return Err(format!("SIG{sig}: the turn ended before the signal; log:\n{}", carto.log()));
+    }
+    let t0 = Instant::now();
+    carto.signal(sig);
+    let code = carto.wait_exit(Duration::from_secs(10));
+    // the tap records on its own thread: give it a moment to read the last bytes
+    std::thread::sleep(Duration::from_millis(200));
+    let stop = drives(&tap).into_iter().find(|(t, d)| *t >= t0 && *d == (0, 0, 0)).map(|(t, _)| t);
+    let log = carto.log();
+    let Some(stop) = stop else {
+        return Err(format!("SIG{sig}: no stop frame after the signal; log:\n{log}"));
+    };
+    let latency = stop.duration_since(t0);
+    if latency > Duration::from_millis(100) {
+        return Err(format!("SIG{sig}: stop frame {latency:?} after the signal"));
+    }
+    if !log.contains("carto stopped") || !log.contains("stop_frame_sent=true") {
+        return Err(format!("SIG{sig}: the stop path did not run; log:\n{log}"));
+    }
+    eprintln!("SIG{sig}: stop frame {latency:?} after the signal, exit {code:?}");
+    Ok(code)
+}
+
+#[test]
+fn issue_45_every_catchable_terminating_signal_sends_the_stop_frame_before_exit() {
+    let dir = TempDir::new("explobot-daemon-signals");
+    let twin = Twin::start(&dir, 0.5);
+    let mut failures = Vec::new();
+    for (sig, n) in SIGNALS_THAT_STOP {
+        match signal_stops_the_motors(&dir, &twin, sig) {
+            Ok(code) if code == Some(128 + n) => {}
+            Ok(code) => failures.push(format!("SIG{sig}: exit {code:?}, expected {}", 128 + n)),
+            Err(e) => failures.push(e),
+        }
+    }
+    for sig in ["TERM", "INT", "HUP"] {
+        match signal_stops_the_motors(&dir, &twin, sig) {
+            Ok(Some(0)) => {}
+            Ok(code) => failures.push(format!("SIG{sig}: exit {code:?}, expected 0")),
+            Err(e) => failures.push(e),
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn issue_45_sigpipe_is_ignored_and_carto_keeps_driving() {
+    let dir = TempDir::new("explobot-daemon-sigpipe");
+    let twin = Twin::start(&dir, 0.5);
+    let (tap_port, tap) = motor_tap(twin.base);
+    let mut carto = Carto::start(&dir, tap_port, twin.base + 1, &[]);
+    wait_for("carto drives the board", Duration::from_secs(20), || (!drives(&tap).is_empty()).then_some(()));
+    carto.signal("PIPE");
+    let n = drives(&tap).len();
+    // The idle zero drive is resent every 500 ms: two more arrive if Carto is alive.
+    wait_for("carto still driving after SIGPIPE", Duration::from_secs(5), || {
+        (drives(&tap).len() >= n + 2).then_some(())
+    });
+    assert_eq!(carto.try_exit(), None, "SIGPIPE ended carto; log:\n{}", carto.log());
+    let mut c = carto.client();
+    c.send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
+    c.read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20));
+}
+
+#[test]
+fn issue_45_after_sigkill_the_motor_boards_watchdog_stops_the_wheels() {
+    let dir = TempDir::new("explobot-daemon-sigkill");
+    let twin = Twin::start(&dir, 0.02);
+    let mut carto = Carto::start(&dir, twin.base, twin.base + 1, &[]);
+    let mut c = carto.client();
+    c.send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
+    c.read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20));
+    for _ in 0..3 {
+        c.send(GuiMessage::SendMovesTrajectory { n_total: 3, command: Cmd::Forward });
+    }
+    twin.wait_line("wheels turning", Duration::from_secs(20), |l| {
+        wheels(l).is_some_and(|w| w.iter().any(|v| v.abs() > 5.0))
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    let t0 = Instant::now();
+    carto.signal("KILL");
+    assert_eq!(carto.wait_exit(Duration::from_secs(5)), None, "SIGKILL cannot be caught");
+    // No stop frame can be sent: the board's 500 ms watchdog stops the wheels, which then spin
+    // down with the motor model's lag.
+    let stopped = twin.wait_line_since(t0, "wheels at 0 after SIGKILL", Duration::from_secs(3), |l| {
+        wheels(l).is_some_and(|w| w.iter().all(|v| v.abs() < 0.5))
+    });
+    eprintln!("after SIGKILL: wheels at 0 {:?} later (status lines every 20 ms)", stopped.duration_since(t0));
+    assert!(
+        stopped.duration_since(t0) >= Duration::from_millis(400),
+        "stopped before the watchdog could act"
+    );
+}
+
+/// Logs since `from` bytes into the log, and the sum of every `more=N` summary in them.
+fn log_since(carto: &Carto, from: usize) -> (String, u64) {
+    let log = carto.log();
+    let new = log.get(from..).unwrap_or_default().to_owned();
+    let more = new
+        .lines()
+        .filter_map(|l| l.split("more=").nth(1))
+        .filter_map(|r| r.split_whitespace().next()?.parse::<u64>().ok())
+        .sum();
+    (new, more)
+}
+
+#[test]
+fn issue_45_a_megabyte_of_each_malformed_kind_writes_a_few_kilobytes_of_log() {
+    let dir = TempDir::new("explobot-daemon-log-flood");
+    let twin = Twin::start(&dir, 0.5);
+    let carto = Carto::start(&dir, twin.base, twin.base + 1, &[]);
+    let kinds: [(&str, &[u8], &str); 5] = [
+        ("cartography moves with command 9", &[0x00, 0x03, 0x02, 0x00, 9], "is not a move"),
+        ("trajectories with n_total 0", &[0x00, 0x04, 0x01, 0x00, 0, 0], "n_total 0"),
+        ("positions with direction 9", &[0x00, 0x05, 0x07, 0x00, 1, 1, 9], "invalid direction"),
+        ("STOP frames", &[0x00, 0x02, 0x06, 0x00], "stop: motors stopped"),
+        ("MOVE_DONE sent by the client", &[0x00, 0x02, 0x03, 0x00], "message for Cute received"),
+    ];
+    let mut report = Vec::new();
+    for (name, frame, line) in kinds {
+        let from = carto.log().len();
+        let frames = (1 << 20) / frame.len();
+        let flood = frame.repeat(frames);
+        let mut stream = TcpStream::connect(("127.0.0.1", carto.port)).unwrap();
+        // Drain Carto's replies (MOVE_DONE, ROBOT_POSITION_RECEIVED) so it never sees a stuck client.
+        let mut reader = stream.try_clone().unwrap();
+        let drain = std::thread::spawn(move || {
+            let mut buf = [0u8; 65536];
+            while matches!(reader.read(&mut buf), Ok(n) if n > 0) {}
+        });
+        std::io::Write::write_all(&mut stream, &flood).unwrap();
+        // Every frame is logged or counted in a summary: wait for the counts to add up.
+        let (log, more) =
+            wait_for(&format!("{name}: every frame logged or counted"), Duration::from_secs(60), || {
+                let (log, more) = log_since(&carto, from);
+                let logged =
+                    log.lines().filter(|l| l.contains(line) && !l.contains("more like this")).count() as u64;
+                (logged + more >= frames as u64).then_some((log, more))
+            });
+        // the reader holds a clone of the socket: shut it down so its read ends
+        let _ = stream.shutdown(std::net::Shutdown::Both);
+        let _ = drain.join();
+        let logged = log.lines().filter(|l| l.contains(line) && !l.contains("more like this")).count() as u64;
+        assert_eq!(logged + more, frames as u64, "{name}: lines and summaries do not add up:\n{log}");
+        report.push(format!(
+            "{name}: {frames} frames, {} bytes / {} lines of log",
+            log.len(),
+            log.lines().count()
+        ));
+        assert!(log.len() < 4096, "{name}: {} bytes of log for 1 MB:\n{log}", log.len());
+    }
+    eprintln!("{}", report.join("\n"));
+}
+
+#[test]
+fn issue_45_five_hundred_empty_connections_write_a_few_lines() {
+    let dir = TempDir::new("explobot-daemon-conn-flood");
+    let twin = Twin::start(&dir, 0.5);
+    let carto = Carto::start(&dir, twin.base, twin.base + 1, &[]);
+    let from = carto.log().len();
+    let t0 = Instant::now();
+    for _ in 0..500 {
+        drop(TcpStream::connect(("127.0.0.1", carto.port)).unwrap());
+    }
+    // Carto has served them all when the next client is answered.
+    let mut c = carto.client();
+    c.send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
+    c.read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(30));
+    std::thread::sleep(Duration::from_millis(1500)); // the last summaries
+    let (log, _) = log_since(&carto, from);
+    let secs = t0.elapsed().as_secs_f64().ceil();
+    eprintln!("500 connections in {secs} s: {} bytes / {} lines of log", log.len(), log.lines().count());
+    // At most one line of each of the three connection kinds, plus its summary, per second.
+    assert!(log.lines().count() as f64 <= 6.0 * (secs + 1.0) + 4.0, "{log}");
+    assert!(log.contains("more like this"), "{log}");
+}
+
+#[test]
+fn issue_45_a_client_trickling_a_frame_is_closed_by_the_idle_limit() {
+    let dir = TempDir::new("explobot-daemon-trickle");
+    let twin = Twin::start(&dir, 0.5);
+    let carto = Carto::start(&dir, twin.base, twin.base + 1, &["--client-idle-limit", "2"]);
+    let mut c = carto.client();
+    c.send(GuiMessage::SendRobotPosition { x: 0, y: 0, direction: Direction::East });
+    c.read_until(|m| *m == GuiMessage::RobotPositionReceived, Duration::from_secs(20));
+    let t0 = Instant::now();
+    // A 1,000-byte frame, one byte every 300 ms: it would take 5 minutes to complete.
+    let mut frame = vec![0x03, 0xE8, 0x07, 0x00];
+    frame.resize(1002, 0x55);
+    let mut closed = None;
+    for b in frame.chunks(1) {
+        if c.try_send_raw(b).is_err() || c.is_closed_within(Duration::from_millis(300)) {
+            closed = Some(t0.elapsed());
+            break;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(15), "the trickling client still holds the session");
+    }
+    let closed = closed.expect("the trickling client was never closed");
+    eprintln!("trickling client closed {closed:?} after its last complete frame");
+    assert!(closed >= Duration::from_millis(1500) && closed <= Duration::from_secs(4), "{closed:?}");
+    assert!(carto.log().contains("idle limit: no complete frame"), "{}", carto.log());
+}
+
+#[test]
+fn issue_45_an_oversize_frame_gets_a_clean_close_not_a_reset() {
+    let dir = TempDir::new("explobot-daemon-oversize");
+    let twin = Twin::start(&dir, 0.5);
+    let carto = Carto::start(&dir, twin.base, twin.base + 1, &[]);
+    for _ in 0..20 {
+        let mut s = TcpStream::connect(("127.0.0.1", carto.port)).unwrap();
+        let mut bytes = vec![0xFF, 0xFF, 0x07, 0x00];
+        bytes.resize(32 * 1024, 0x55);
+        std::io::Write::write_all(&mut s, &bytes).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(10))).unwrap();
+        let mut buf = [0u8; 64];
+        match s.read(&mut buf) {
+            Ok(0) => {}
+            other => panic!("expected a clean close (EOF), got {other:?}"),
+        }
+    }
+    assert!(carto.log().contains("fatal framing error"), "{}", carto.log());
 }

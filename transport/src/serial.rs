@@ -149,6 +149,13 @@ impl SerialLink {
     }
 }
 
+/// The device, for a caller that waits on it with `poll`.
+impl std::os::fd::AsFd for SerialLink {
+    fn as_fd(&self) -> std::os::fd::BorrowedFd<'_> {
+        std::os::fd::AsFd::as_fd(&self.file)
+    }
+}
+
 impl Link for SerialLink {
     type Error = Error;
 

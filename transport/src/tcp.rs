@@ -246,6 +246,22 @@ impl TcpListenerLink {
     }
 }
 
+/// The socket, for a caller that waits on it with `poll` (readable: a client to accept).
+#[cfg(unix)]
+impl std::os::fd::AsFd for TcpListenerLink {
+    fn as_fd(&self) -> std::os::fd::BorrowedFd<'_> {
+        std::os::fd::AsFd::as_fd(&self.listener)
+    }
+}
+
+/// The socket, for a caller that waits on it with `poll`.
+#[cfg(unix)]
+impl std::os::fd::AsFd for TcpLink {
+    fn as_fd(&self) -> std::os::fd::BorrowedFd<'_> {
+        std::os::fd::AsFd::as_fd(&self.stream)
+    }
+}
+
 impl Listener for TcpListenerLink {
     type Link = TcpLink;
     type Error = Error;

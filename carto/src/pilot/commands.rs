@@ -32,12 +32,20 @@ impl Pilot {
                 self.counters.bad_values += 1;
                 match kind {
                     TaskKind::Cartography => {
-                        tracing::warn!(command = other, "cartography command is not a move");
+                        self.note(
+                            "command is not a move",
+                            true,
+                            format!("cartography command {other} is not a move"),
+                        );
                         self.counters.moves_failed += 1;
                         self.end_task(now);
                     }
                     TaskKind::Trajectory => {
-                        tracing::warn!(command = other, "trajectory command is not a move: skipped");
+                        self.note(
+                            "command is not a move",
+                            true,
+                            format!("trajectory command {other} is not a move: skipped"),
+                        );
                     }
                 }
                 return;

@@ -41,8 +41,13 @@ impl Drop for TempDir {
     }
 }
 
-/// The workspace's binaries sit next to this test's `deps/` folder.
+/// The workspace's binaries sit next to this test's `deps/` folder, or in `EXPLOBOT_BIN_DIR` if
+/// set (when several checkouts share one target directory, its `release/carto` is whichever
+/// checkout built last).
 pub fn binary(name: &str) -> PathBuf {
+    if let Some(dir) = std::env::var_os("EXPLOBOT_BIN_DIR") {
+        return PathBuf::from(dir).join(name);
+    }
     let exe = std::env::current_exe().expect("test executable path");
     let dir = exe.parent().and_then(Path::parent).expect("target profile folder");
     let path = dir.join(name);
@@ -252,7 +257,8 @@ impl Client {
         self.try_send_raw(&m.to_bytes(MsgOrder::BigEndian))
     }
 
-    fn try_send_raw(&mut self, mut bytes: &[u8]) -> Result<(), String> {
+    /// Sends raw bytes, or says why the connection would not take them.
+    pub fn try_send_raw(&mut self, mut bytes: &[u8]) -> Result<(), String> {
         let deadline = Instant::now() + Duration::from_secs(60);
         while !bytes.is_empty() {
             let n = self.link.write(bytes).map_err(|e| format!("carto closed the connection: {e}"))?;
