@@ -10,6 +10,9 @@
 #   bash docs/results/update.sh --check    only check that the README's status box is what
 #                                          --status would write (exit 1 and a diff if not);
 #                                          tests/tests/readme.rs runs this in CI
+#   EXPLOBOT=path/to/explobot bash docs/results/update.sh
+#                                          use that binary instead of building one (its STAMP
+#                                          then says the binary was not built from the commit)
 #
 # Each sweep's folder keeps summary.md (its first line is the verdict the status box quotes) and
 # STAMP (commit, date, machine, command). results.jsonl, junit.xml and sweep.json are deleted:
@@ -144,13 +147,18 @@ check_status() {
 }
 
 run_all() {
-  export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/explobot-target}"
-  cargo build --release --locked -p sim --bin explobot
-  local explobot="$CARGO_TARGET_DIR/release/explobot"
-  local commit date machine entry name args code failed=0
+  local explobot commit date machine entry name args code failed=0
   commit="$(git rev-parse HEAD)"
   if ! git diff --quiet HEAD -- . ":(exclude)$RESULTS" ":(exclude)$README"; then
     commit="$commit (with uncommitted changes)"
+  fi
+  if [ -n "${EXPLOBOT:-}" ]; then
+    explobot="$EXPLOBOT"
+    commit="$commit (binary $EXPLOBOT given, not built here)"
+  else
+    export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/explobot-target}"
+    cargo build --release --locked -p sim --bin explobot
+    explobot="$CARGO_TARGET_DIR/release/explobot"
   fi
   machine="$(uname -m), $(nproc) cores"
   for entry in "${SWEEPS[@]}"; do
@@ -192,7 +200,7 @@ case "${1:-}" in
   "") run_all ;;
   --status) write_status ;;
   --check) check_status ;;
-  -h | --help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//' ;;
+  -h | --help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//' ;;
   *)
     echo "usage: bash docs/results/update.sh [--status | --check]" >&2
     exit 2
