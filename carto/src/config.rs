@@ -63,7 +63,7 @@ pub struct CartoConfig {
     /// listening (kept as readings in turns): the end of the turn sweeps the cone across one side
     /// of the next FORWARD's path, this sweeps it across the other. Degrees; `0` turns it off;
     /// needs `turn_readings`. Mapping turns only: after a STOP in a trajectory batch Cute cannot
-    /// tell which of its turns were made (README, "Safety checks", "Looking past a turn").
+    /// tell which of its turns were made (`docs/explanation/carto-design.md`).
     pub look_past_turn_deg: f64,
     /// Watch the sonar while a FORWARD runs: a range that holds while the wheels drive means the
     /// body is stuck and the wheels slip; Carto stops, corrects its position by the sonar, answers

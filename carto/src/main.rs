@@ -103,7 +103,7 @@ struct Args {
     #[arg(long, value_name = "METRES")]
     cell: Option<f64>,
     /// Before each FORWARD, look this far left and right with the sonar and refuse the move when
-    /// an echo lies in the body's path (0 = off, the default). README, "Safety checks".
+    /// an echo lies in the body's path (0 = off, the default). docs/explanation/carto-design.md.
     #[arg(long, value_name = "DEGREES", default_value_t = 0.0)]
     scan_deg: f64,
 }

@@ -25,8 +25,7 @@
 //!   out, not converged, a reading gone stale — is turned back to the grid heading it started
 //!   from before `MOVE_DONE`, so the body faces the heading Carto still stores (Cute learns from
 //!   the next FORWARD's reply that the turn was not made). A reconnect whose re-sent pose takes
-//!   that turn as made defeats this: the stored heading then follows Cute (README, "Known
-//!   limits").
+//!   that turn as made defeats this: the stored heading then follows Cute (a known limit).
 //! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
@@ -40,10 +39,8 @@
 //!   estimate after the FORWARD starts does not count: the estimate takes no samples in a turn
 //!   and the 0.5 s after it, and a FORWARD often starts within them, so that sample still holds
 //!   what the turn before did. What the watch misses is listed at
-//!   [`crate::sensors::PUSH_JUMP_DEG`]. Before this the robot drove on, sliding along what it
-//!   touched: in generated flat seed 5 one such FORWARD and the one after it left Carto's
-//!   belief 31 cm off, and the rest of the run was lost. Measured in the README ("Safety
-//!   checks", "Pushed").
+//!   [`crate::sensors::PUSH_JUMP_DEG`]. Without the watch the robot drives on, sliding along
+//!   what it touched, and its belief is lost.
 //!
 //! Invariants: every task ends with exactly one `MOVE_DONE` unless STOP, a disconnect or a lost
 //! board link ([`Pilot::on_link_lost`]) drops it;

@@ -57,14 +57,14 @@ pub const SLIP_HOLD: Duration = Duration::from_millis(2000);
 /// passes 3° (a slow push), within 2 s of an earlier jump, or on the one sample the watch
 /// excuses; and an encoder or telemetry frame damaged past its checksum can open a gap without
 /// any touch (the FORWARD then stops and reports a free cell blocked). The threshold is above
-/// [`DRIFT_JUMP_DEG`]: on `lossy-motor` (seed 10), whose motor link loses frames, a FORWARD that
-/// touched nothing opened a 2.8° gap, and a 2° threshold stopped it (the map missed a cell).
+/// [`DRIFT_JUMP_DEG`]: over a motor link that loses frames a FORWARD that touches nothing can
+/// open a gap of nearly 3°.
 pub const PUSH_JUMP_DEG: f64 = 3.0;
 
 /// After a slip the new anchor is the mean of this many samples taken once the hold is over,
 /// not the last sample of the hold: one IMU sample carries its 0.2° noise and the wheels' heading
-/// its encoder timing (spikes of up to 1.5°), and a whole run's drift estimate used to lose
-/// 0.2–1° at every slip that way, never to get it back (generated office seed 4: 7° by the end).
+/// its encoder timing (spikes of up to 1.5°), and anchored on one sample the drift estimate
+/// loses a little at every slip, never to get it back.
 pub const SLIP_SETTLE_SAMPLES: usize = 20;
 
 /// A value and the time it arrived.

@@ -1,6 +1,6 @@
 //! What Carto has seen around the robot: the echo points of the front sonar, kept in the grid's
-//! metric frame so that a FORWARD and a turn can be checked against them (issue 10, "turns are
-//! safe", and the swept-body check before a FORWARD).
+//! metric frame so that a FORWARD and a turn can be checked against them (the turning-circle
+//! check before a turn and the swept-body check before a FORWARD).
 //!
 //! Concept: the HC-SR04 sees a narrow cone (15°) straight ahead. One reading before a FORWARD
 //! covers the middle 10 cm of a 24 cm wide body's path at 40 cm; a leg or a furniture corner at
@@ -24,7 +24,7 @@
 //! reading clears only the points heard along a ray within [`CLEARS_HEARD_WITHIN_DEG`] of its
 //! own: a sofa's top heard head-on from the row above lies at the edge of the cone of a robot
 //! driving along the row beside it, at a glancing angle that gives no echo, and the far wall's
-//! echo used to wipe it out (README, "Had the sonar heard it?").
+//! echo would wipe it out.
 //!
 //! Invariants: at most [`MAX_POINTS`] points are kept (the oldest go first), and points further
 //! than [`FORGET_BEYOND_M`] from the robot are dropped when a new one is added: a stale point far
@@ -35,7 +35,7 @@
 //! A floor plan can be given too ([`Surroundings::add_fixed`], [`crate::Carto::add_known_surfaces`]):
 //! points on the room's surfaces, which the checks treat as echoes and which nothing clears or
 //! forgets. The twin uses it for `--known-room` runs, which take the sonar's blind spots out of
-//! the picture (README, "Perfect perception").
+//! the picture (`docs/explanation/sensor-limits.md`).
 //!
 //! ```
 //! use carto::surroundings::{Pose2, Surroundings};
@@ -177,8 +177,7 @@ impl Surroundings {
     /// behind, `half_width_m` either side): the body stands there, so nothing else does. Such a
     /// point was placed from a pose dead reckoning got wrong (a push in a collision, slip); kept,
     /// it lay inside every turning circle from then on and Carto refused every turn where it
-    /// stood (generated warehouse seed 19: 13,945 refusals in 28 minutes, until the room's time
-    /// limit).
+    /// stood, until the room's time limit.
     pub fn clear_footprint(&mut self, robot: Pose2, half_length_m: f64, half_width_m: f64) {
         let local = robot.localiser();
         self.points.retain(|e| {

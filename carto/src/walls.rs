@@ -1,5 +1,5 @@
 //! Surfaces the sonar ranged straight ahead at rest, remembered on the grid: absolute along-track
-//! fixes (issue 10, item 4).
+//! fixes.
 //!
 //! Concept: a straight reading at rest says where a surface is along the grid heading, `depth`
 //! metres from the grid's origin: the robot's believed position along the heading, plus the
@@ -15,13 +15,13 @@
 //! of a row on the second pass): against a reading taken when the robot still knew where it was,
 //! those readings hold the position.
 //!
-//! Decisions (measured on the 12 scenarios over seeds 1–20 and the 37-minute hall):
+//! Decisions:
 //! - only echoes closer than `pilot::safety::WALL_FIX_MAX_M` (1 m) are kept or matched: the cone
 //!   is then no wider than the body, so the echo comes from what lies straight ahead. Far echoes
 //!   come from whatever is nearest in a wide cone; matching them against near ones moved the
 //!   robot by centimetres in furnished rooms;
 //! - only the same row or column matches: with ±2 rows, faces of different furniture at similar
-//!   depths were taken for one surface and the 12 scenarios fell from 235 to 201 passes of 240;
+//!   depths were taken for one surface, and runs that passed failed;
 //! - a wall keeps its first depth: the earliest reading carries the least drift, and averaging
 //!   later readings in would let the drift move the wall;
 //! - a reading that matches no wall becomes a new wall;

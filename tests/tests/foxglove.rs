@@ -218,7 +218,7 @@ fn issue_13_mcap_counts_hold_with_link_errors_and_a_reconnect() {
 
 #[test]
 fn issue_13_sweep_writes_an_mcap_for_each_run_that_fails() {
-    // furnished fails with seed 9 (a collision, docs/scenarios-seeds-1-20.md) and passes with
+    // furnished fails with seed 9 (a collision, docs/journal/figures/scenarios-seeds-1-20.md) and passes with
     // seed 2: one file, for run 1 (seed 9).
     let dir = TempDir::new("explobot-fox-sweep");
     let out = dir.0.join("sweep");

@@ -95,8 +95,8 @@ impl Pilot {
     /// link a small rotation can stall long enough to count as jammed):
     /// - within [`REFACE_CLOSE_DEG`] of the reference, the move `mv` starts from where the body
     ///   faces: a FORWARD's heading hold and a turn's absolute target take the rest, and the
-    ///   reference stays (learning it from the IMU here took the angle the look stalled at for
-    ///   the grid heading: `lossy-motor` seed 15 then drove 7° off the grid and touched a wall);
+    ///   reference stays (learning it from the IMU here would take the angle the look stalled at
+    ///   for the grid heading);
     /// - farther off, the move fails and the reference stays, so the next move faces it again;
     ///   after [`REFACE_TRIES`] such failures in a row the heading is learnt from the IMU again,
     ///   so the robot is never stuck refusing every move.

@@ -1,4 +1,4 @@
-//! The pilot's safety checks (issue 10): the sonar scan and the swept-body check before a
+//! The pilot's safety checks: the sonar scan and the swept-body check before a
 //! FORWARD, and the turning-circle check before a turn, against the echo points of
 //! [`crate::surroundings`].
 //!
@@ -21,16 +21,15 @@
 //!   most a quarter cell) after which the circle is clear; when none is, it refuses the turn:
 //!   the reason is logged and the command answered with `MOVE_DONE` only — the link protocol has
 //!   no message that could carry the reason, so Cute takes the turn as done (a known limit,
-//!   README "Safety checks"). A shift that ends outside its tolerance is checked again from
+//!   `docs/explanation/carto-design.md`). A shift that ends outside its tolerance is checked again from
 //!   where the robot believes it stopped: the turn runs if the circle is clear from there.
 //! - **Back to the centre.** A turn made more than [`RECENTRE_FROM_M`] from its cell's centre
 //!   (after such a shift, or any other offset: an along-track fix, a stall's correction, an
 //!   offset kept across a reconnect) ends with the body driving back towards the centre,
 //!   holding the new heading, before the turn's `MOVE_DONE`: Cute believes the robot stands at
-//!   its cell's centre, the next FORWARD's corridor check is made from there, and issue 10 holds
-//!   the robot within 5 cm of it at every `MOVE_DONE` (a 9 cm shift used to stay in the
-//!   position error). Mapping, the look past the turn runs first, where the turning circle was
-//!   clear. The drive stops where a known echo would come into the body's rectangle plus the
+//!   its cell's centre, the next FORWARD's corridor check is made from there, and a run's
+//!   position error is measured from it at every `MOVE_DONE`. Mapping, the look past the turn
+//!   runs first, where the turning circle was clear. The drive stops where a known echo would come into the body's rectangle plus the
 //!   clearance (the body turned 90° is 1 cm longer across the old heading than before); the
 //!   next FORWARD takes the rest back. A STOP or a disconnect in the look or the drive, before
 //!   the `MOVE_DONE`, takes the turn back in Carto's belief (Cute never heard of it), and the
@@ -66,9 +65,7 @@
 //!   only when the whole arc lies in the body's path. These points feed only the corridor
 //!   check, never the turn check (but for the one that refuses a FORWARD, "Kept while they
 //!   hold"): a turn would shift away from an echo whose position is this uncertain. Readings at
-//!   rest clear them as they clear the others. Measured in the README
-//!   ("Safety checks"): on central rays, or over wider windows, they blocked moves that were
-//!   free.
+//!   rest clear them as they clear the others.
 //!
 //!   The end of a turn sweeps the cone across one side of the next FORWARD's path only (the
 //!   side the turn comes from). So after a mapping turn and its `MOVE_DONE` the robot turns on
@@ -103,18 +100,10 @@
 //! - **Kept while they hold.** The echoes heard moving (in turns, looks and FORWARDs) stay until
 //!   a reading at rest sees through them, the body stands on them, the robot is
 //!   [`crate::surroundings::FORGET_BEYOND_M`] away, or Cute sends a new pose, as the echoes
-//!   heard at rest do; they are not forgotten when the next FORWARD or turn starts. Until
-//!   2026-11-26 they served the FORWARD right after them only, and the robot drove into a leg it
-//!   had heard a move earlier: of the 86 first contacts in the 200 generated rooms whose spot the
-//!   sonar had heard from 1 m or nearer, Carto held a point within 10 cm of it in 6 (README,
-//!   "Had the sonar heard it?"). Kept, 12 of the 200 rooms pass instead of 9 and collisions fall
-//!   by 5 %; asked by the turn check too, collisions fell by 9 % more but coverage by 0.7 points
-//!   and one more room failed, so the turn check still does not ask them. One exception: the
-//!   point that refuses a FORWARD is kept from then on as if heard at rest, so the turn Cute
-//!   asks for next (it usually turns away from a refused cell) keeps clear of it too. Carto has
-//!   just acted on that point; before this the turn ignored it, and in generated irregular
-//!   seed 3 turned into the box that had refused the FORWARD 0.4 s earlier. On the 200
-//!   generated rooms: collisions 2,515 → 2,428, the same 12 pass, coverage 86.8 → 86.6 %.
+//!   heard at rest do; they are not forgotten when the next FORWARD or turn starts. The turn
+//!   check does not ask them, with one exception: the point that refuses a FORWARD is kept from
+//!   then on as if heard at rest, so the turn Cute asks for next (it usually turns away from a
+//!   refused cell) keeps clear of it too: Carto has just acted on that point.
 //!
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
@@ -133,8 +122,8 @@ use crate::ultrasound::Ultrasound;
 /// Step of the shift search before a turn, metres.
 const SHIFT_STEP_M: f64 = 0.01;
 /// A turn made farther than this from its cell's centre is followed by a drive back to the
-/// centre, metres: a move ends within 1 cm, a shift is at least 2 cm, and issue 10 holds the
-/// robot within 5 cm of the centre of the cell Cute believes at every `MOVE_DONE`.
+/// centre, metres: a move ends within 1 cm, a shift is at least 2 cm, and a run's position error
+/// is measured from the centre of the cell Cute believes at every `MOVE_DONE`.
 const RECENTRE_FROM_M: f64 = 0.03;
 /// Echoes further than this are not used for the along-track fix (the cone widens), metres.
 pub const ALONG_FIX_MAX_M: f64 = 2.0;
@@ -664,7 +653,7 @@ impl Pilot {
     /// came from a wrong pose. Both turn checks ask this. After a shift that ended off target the
     /// believed pose is the least sure, and an echo it puts under the body is forgotten all the
     /// same: a reading at rest would forget it too, and keeping it would refuse every turn from
-    /// there (warehouse seed 19 of the generated rooms, before the footprint was cleared).
+    /// there.
     fn echo_in_turning_circle(&mut self, robot: Pose2) -> Option<(f64, f64)> {
         let s = self.safety;
         self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);

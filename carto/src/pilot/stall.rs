@@ -1,5 +1,4 @@
-//! Stalled FORWARDs: wheels that turn while the body stands still (issue 10, "handles wheel
-//! slip").
+//! Stalled FORWARDs: wheels that turn while the body stands still.
 //!
 //! Pushed against something the sonar did not report (the side of a slanted box, a leg beside
 //! the path), the body stops but the wheels keep turning on the floor, and the encoders count a
@@ -30,8 +29,8 @@
 //!   far apart from two surfaces fit any line.
 //!
 //! The span is 15 cm, or twelve sonar σ when that is longer (24 cm with `noisy`'s 2 cm sonar):
-//! over 8 cm the ±1.1 cm of timing alone made a flat stretch of three readings in a robot that
-//! drove (generated warehouse seeds 2 and 20). A stall in the last span of a FORWARD is not
+//! over 8 cm the ±1.1 cm of timing alone can make a flat stretch of three readings in a robot
+//! that drives. A stall in the last span of a FORWARD is not
 //! seen: the wheels finish first.
 //!
 //! What the body really drove is read off the sonar: the line is extended back over earlier
