@@ -9,7 +9,7 @@
 //! SIGSTKFLT, SIGXCPU, SIGXFSZ, SIGSYS, SIGTRAP, SIGABRT and the real-time signals) only sets a
 //! flag and wakes the loop; SIGPIPE is ignored (Rust's runtime does so), so a write to a closed
 //! socket is an error that ends that session, not Carto. SIGKILL and SIGSTOP cannot be caught:
-//! then the motor board's own watchdog stops the wheels (README, "Signals and SIGKILL").
+//! then the motor board's own watchdog stops the wheels (`carto/README.md`, "The daemon on the robot").
 //!
 //! The loop sleeps in `poll(2)` on the board links, the listener, the client and the signal
 //! pipe, until a byte arrives or Carto's next deadline ([`CartoRuntime::next_deadline`]): every

@@ -3,7 +3,7 @@
 //! connections) cannot flood the log.
 //!
 //! Concept: sans-IO, time passed in. Every line Carto logs about client or board input goes
-//! through one limiter ([`log_limited!`], [`warn_limited!`]), keyed by a kind and a source (the
+//! through one limiter (`log_limited!`, `warn_limited!`), keyed by a kind and a source (the
 //! client's host, see [`host_of`]; `""` for the boards). The first line of a kind and source is
 //! logged and opens a window of `period`; further lines of that kind and source inside the
 //! window are only counted. When the window

@@ -15,8 +15,9 @@
 #                                          then says the binary was not built from the commit)
 #
 # Each sweep's folder keeps summary.md (its first line is the verdict the status box quotes) and
-# STAMP (commit, date, machine, command). results.jsonl, junit.xml and sweep.json are deleted:
-# they are large, and `explobot sweep` writes them again from the same command.
+# STAMP (commit, date, machine, command); the two generated baselines keep results.jsonl too, so
+# that a later change can be paired with them run by run (`explobot sweep compare`). junit.xml
+# and sweep.json are deleted: `explobot sweep` writes them again from the same command.
 # Documented in docs/how-to/sweeps.md.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -190,7 +191,14 @@ run_all() {
   fi
   for entry in "${SWEEPS[@]}"; do
     name="${entry%%|*}"
-    find "$RESULTS/$name" -mindepth 1 -not -name summary.md -not -name STAMP -delete
+    case "$name" in
+      # The baselines keep their runs, so that a later sweep can be paired with them run by run
+      # (`explobot sweep compare`).
+      generated-600 | generated-600-known-room)
+        find "$RESULTS/$name" -mindepth 1 -not -name summary.md -not -name STAMP -not -name results.jsonl -delete
+        ;;
+      *) find "$RESULTS/$name" -mindepth 1 -not -name summary.md -not -name STAMP -delete ;;
+    esac
   done
   write_status
   return "$failed"

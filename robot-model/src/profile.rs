@@ -1,7 +1,7 @@
 //! The robot profile: every physical and firmware parameter of one robot, loaded from RON.
 //!
 //! A profile is data, never code: the default robot lives in
-//! `scenarios/robots/mecanum-4wd.ron` (values and sources in `shared/spec/robot.md`), and
+//! `scenarios/robots/mecanum-4wd.ron` (values and sources in `docs/reference/robot-profile.md`), and
 //! [`RobotProfile::default`] returns exactly the same values (a test checks the shipped file
 //! parses and equals the default). A user with another chassis writes another file.
 //!
@@ -386,7 +386,7 @@ pub struct SensorBoardParams {
 }
 
 impl Default for RobotProfile {
-    /// The default robot of `shared/spec/robot.md`, equal to `scenarios/robots/mecanum-4wd.ron`.
+    /// The default robot, equal to `scenarios/robots/mecanum-4wd.ron`.
     fn default() -> Self {
         RobotProfile {
             name: "mecanum-4wd".to_owned(),

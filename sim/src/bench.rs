@@ -2,7 +2,7 @@
 //!
 //! * **physics** — [`RobotBody`] alone in a scenario's room, driven in a fixed pattern (forward,
 //!   spin, strafe), in three variants: no sonar; the sonar at its real 60 ms cycle; and a 5-ray
-//!   cast on *every* step (the worst case the target is stated for).
+//!   cast on *every* step (the worst case, the one the throughput target is stated for).
 //! * **full stack** — a whole scenario run (Cute ⇄ Carto ⇄ boards ⇄ physics, real bytes on every
 //!   link) in the lockstep runner, headless, on one thread.
 //!

@@ -159,7 +159,7 @@ impl RobotBody {
     }
 
     /// From now on, keeps every point the sonar reports an echo from for the first time (one per
-    /// shape and [`HEARD_CELL_M`] cell), for [`RobotBody::take_new_heard`] (`--known-echoes`).
+    /// shape and `HEARD_CELL_M` cell), for [`RobotBody::take_new_heard`] (`--known-echoes`).
     pub fn collect_new_heard(&mut self) {
         self.new_heard.get_or_insert_with(Vec::new);
     }

@@ -24,7 +24,7 @@
 //!   turn, and slide back.
 //! - Every command ends with the body within a given distance of the cell's centre (the `stop`
 //!   of [`FreeSpace::visits`]): the report measures the position error from the centre at every
-//!   `MOVE_DONE`, so a robot that stops 4 cm off the centre spends 4 of the 5 cm the issue allows.
+//!   `MOVE_DONE`, so a robot that stops 4 cm off the centre spends 4 of the 5 cm a run is allowed.
 //! - The robot starts in any piece of its start cell, facing the start heading.
 //!
 //! The states are (piece of a cell the body can slide within, heading), and the tour bound is the

@@ -1,4 +1,5 @@
-//! How far Cute's belief is from where the robot really is (issue 10, item 2).
+//! How far Cute's belief is from where the robot really is (information; runs are judged on
+//! Carto's own belief, [`crate::belief`]).
 //!
 //! Cute believes the robot stands at the centre of one cell, facing one of four headings. At the
 //! end of every move (each `MOVE_DONE` Cute receives) and at the end of the run, the runner
@@ -11,8 +12,7 @@
 //! when the move is done), so the errors are sampled only at those moments. The report keeps the
 //! largest of each, when and where it happened, and the number of samples.
 //! `RUST_LOG=sim::localisation=trace` logs every sample: the believed cell and how far east
-//! (`dx_m`) and north (`dy_m`) of its centre the robot really is (how the long-mission drift of
-//! issue 10 was traced).
+//! (`dx_m`) and north (`dy_m`) of its centre the robot really is.
 //!
 //! ```
 //! use robot_model::grid::{GridFrame, Heading};

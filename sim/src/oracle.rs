@@ -16,7 +16,7 @@
 //! where it really is and never forgotten, from the step after the measurement
 //! ([`carto::Carto::add_known_surfaces`]). It asks how far a perfect memory of what the sonar
 //! heard would go: Carto itself knows an echo only as a range somewhere across a 15° cone, placed
-//! from its odometry, and forgets it (README, "Kept while they hold"). Such a run's report says
+//! from its odometry, and forgets it (`docs/explanation/carto-design.md`). Such a run's report says
 //! `known_echoes: true`.
 //!
 //! ```

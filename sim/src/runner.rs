@@ -587,7 +587,7 @@ impl Lockstep {
     }
 
     /// Every byte moved on every link, per endpoint: complete once the run is finished, else as of
-    /// the last collection (every [`TRACE_EVERY`] steps).
+    /// the last collection (every `TRACE_EVERY` = 200 steps).
     pub fn link_logs(&self) -> &[EndpointLog] {
         &self.logs
     }

@@ -1,5 +1,6 @@
-//! What the robot can really do in a room, cell by cell: the ground truth of issue 10 ("real
-//! rooms"), measured with the robot's own footprint rather than the cell square.
+//! What the robot can really do in a room, cell by cell: the ground truth runs are scored
+//! against, measured with the robot's own footprint rather than the cell square (the scored set
+//! with the robot's clearance is [`crate::scored`]).
 //!
 //! - A cell is **free** when the robot can stand at its centre: its footprint (body length ×
 //!   width, from the profile) lies inside the room and touches no wall or obstacle, facing along

@@ -323,7 +323,7 @@ pub struct TruthArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Also bound one touch-free tour for a body that keeps this many metres from everything,
-    /// anywhere in its cells (`sim/README.md`, "Clearance"); repeat for several, e.g.
+    /// anywhere in its cells (`sim/src/freespace.rs`); repeat for several, e.g.
     /// `--clearance 0.01 --clearance 0.02`.
     #[arg(long, value_name = "METRES", value_parser = parse_metres)]
     pub clearance: Vec<f32>,
@@ -412,7 +412,7 @@ mod tests {
 
     use super::*;
 
-    /// The awkward cases of `sim/README.md`: a thin wall on a cell line, a leg on a cell corner and
+    /// The awkward cases of [`crate::truth`]'s module docs: a thin wall on a cell line, a leg on a cell corner and
     /// a wall 2 cm into a row, counted and drawn.
     #[test]
     fn the_documented_cases_count_as_the_readme_says() {

@@ -565,7 +565,7 @@ impl SimWorld {
 
     /// The steps after which the robot moved faster than its wheels can drive it. None should
     /// ever happen; a run with one did something unphysical from then on, and its report says so
-    /// (`sim/README.md`, "Contacts").
+    /// (`docs/explanation/physical-model.md`, "Contacts").
     pub fn unphysical(&self) -> Unphysical {
         self.unphysical
     }

@@ -7,10 +7,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Documents another branch writes at the same time; linked as if they exist. Once both exist
-/// they are checked like any other path, and this list can go.
-const WRITTEN_ELSEWHERE: [&str; 2] = ["docs/explanation/scoring.md", "docs/results/README.md"];
-
 /// The subcommands cheap enough to run here (well under a second each).
 const CHEAP: [&str; 5] = ["check", "decode", "encode", "generate", "truth"];
 
@@ -211,16 +207,6 @@ fn every_path_the_readme_and_the_docs_name_exists() {
         for (path, from_root) in mentioned_paths(&text) {
             let base = if from_root { root.clone() } else { doc.parent().unwrap().to_path_buf() };
             if exists(&base, &path) {
-                continue;
-            }
-            let full = normalise(&base.join(&path));
-            let relative = full.strip_prefix(&root).map(Path::to_path_buf).unwrap_or(full.clone());
-            if WRITTEN_ELSEWHERE.iter().any(|w| relative == Path::new(w)) {
-                eprintln!(
-                    "note: {} names {}, written on another branch, not here yet",
-                    doc.display(),
-                    relative.display()
-                );
                 continue;
             }
             missing.push(format!("{}: {path}", doc.strip_prefix(&root).unwrap().display()));

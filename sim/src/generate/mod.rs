@@ -1,4 +1,4 @@
-//! Room generator: realistic scenario files drawn from `shared/spec/rooms.md`.
+//! Room generator: realistic scenario files, sizes drawn from measured rooms (walls, doors, furniture, legs).
 //!
 //! `explobot generate --style STYLE --seed N [--out FILE]` writes one scenario. The room is what a
 //! user would measure in their home or workplace and write down: sizes come from the ranges of
@@ -45,9 +45,8 @@
 //!   free neighbouring cell without touching anything. The start is drawn among such cells of
 //!   the largest connected free area (where a user puts the robot down, not inside a closet).
 //!   When a draw has none, the next sub-seed is drawn.
-//! - The mission is `[StartCartography, WaitUntilMapped]`; expectations are the pass criteria of
-//!   issue 10 — coverage ≥ 0.98, accuracy ≥ 0.95, no collision, position error ≤ 5 cm, heading
-//!   error ≤ 3°, Cute's final cell the true one — and 40 s per m² of floor (about 67 minutes for 10 × 10 m,
+//! - The mission is `[StartCartography, WaitUntilMapped]`; expectations are the robot's pass
+//!   criteria (the profile's `scoring.pass`, `docs/explanation/scoring.md`) and 40 s per m² of floor (about 67 minutes for 10 × 10 m,
 //!   at least 5 minutes) as both the finish limit and the run's time limit: Carto needs 2–4 s
 //!   per 0.30 m cell today, so the limit catches runs that hang without making speed a hidden
 //!   pass criterion.

@@ -34,7 +34,7 @@ use transport::TraceRecord;
 
 use super::Lockstep;
 
-/// Called around every step of a [`Lockstep`] (see the [module docs](self)).
+/// Called around every step of a [`Lockstep`] (see the module docs of `runner/observe.rs`).
 pub trait StepObserver: Send + Sync {
     /// At the start of a step, once the clock has moved and before anything else.
     fn before_step(&mut self) {}

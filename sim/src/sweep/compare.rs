@@ -4,7 +4,7 @@
 //! rate with its Wilson 95 % interval over the paired runs, every run that flipped (pass → fail,
 //! fail → pass) with its room and seed, McNemar's exact test of the flips (a change of the pass
 //! rate is called significant at p < 0.05), the change of each continuous figure
-//! ([`Figures`](super::stats::Figures)), and how many pairs moved the same bytes on every link
+//! ([`super::stats::Figures`]), and how many pairs moved the same bytes on every link
 //! (equal `link_log_sha256`) — a change meant to alter no behaviour shows all of them equal.
 //! Runs of one sweep without a partner are counted, not compared.
 

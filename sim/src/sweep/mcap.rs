@@ -1,7 +1,7 @@
 //! `explobot sweep --mcap`: an MCAP file for each run that did not pass.
 //!
 //! Concept: runs are deterministic, so a failed run is run again, this time with a
-//! [`Recorder`](crate::viz::Recorder) on it, once the sweep is over: the passing runs pay
+//! [`crate::viz::Recorder`] on it, once the sweep is over: the passing runs pay
 //! nothing, and the file shows exactly the run the results describe. The second run's link-log
 //! hash is compared with the first's; a difference is reported (it would mean the run is not
 //! deterministic) and the file is kept.

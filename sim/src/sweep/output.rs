@@ -455,7 +455,7 @@ fn touched_first(s: &mut String, records: &[RunRecord]) {
 }
 
 /// The "Not physical" list: runs in which the body moved faster than its wheels can drive it
-/// (`sim/README.md`, "Contacts"). Nothing when there is none.
+/// (`docs/explanation/physical-model.md`, "Contacts"). Nothing when there is none.
 fn not_physical_runs(s: &mut String, records: &[RunRecord]) {
     let runs: Vec<(&RunRecord, f64)> =
         records.iter().filter_map(|r| Some((r, r.unphysical.as_ref()?.first_at_s?))).collect();

@@ -27,7 +27,7 @@ impl Outbox {
     }
 }
 
-/// A channel of messages of type `T` (see the [module docs](self)).
+/// A channel of messages of type `T` (see the module docs of `viz/outbox.rs`).
 pub struct Topic<T> {
     raw: Arc<RawChannel>,
     buffer: Arc<Mutex<Vec<u8>>>,

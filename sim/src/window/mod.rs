@@ -118,7 +118,7 @@ fn screenshot_when_due(sim: Res<Sim>, mut pacing: ResMut<Pacing>, mut shot: ResM
 }
 
 /// Makes the window rewrite a JSON status file at `path` a few times a second (see
-/// [`status_file`]).
+/// `status_file`).
 pub fn request_status_file(app: &mut App, path: PathBuf) {
     app.insert_resource(StatusFile::new(path));
 }

@@ -118,7 +118,7 @@ pub enum MotorMessage {
         #[arg(value_parser = number::<u8>)]
         gear: u8,
     },
-    /// Drive v2: VX VY OMEGA [SPEED_RATIO], percent.
+    /// Drive v2: VX VY OMEGA \[SPEED_RATIO\], percent.
     DriveV2 {
         /// Forward speed, %.
         #[arg(value_parser = number::<i8>, allow_negative_numbers = true)]
