@@ -20,6 +20,7 @@ pub mod raster;
 pub mod record;
 pub mod replay;
 pub mod report;
+pub mod runlog;
 pub mod runner;
 pub mod scenario;
 pub mod scored;

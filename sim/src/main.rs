@@ -30,6 +30,10 @@ use tracing_subscriber::prelude::*;
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
+    /// Show Carto's and Cute's log lines (INFO and above) on the terminal; without it they go to
+    /// the run folder's log.txt only. RUST_LOG, when set, decides instead.
+    #[arg(short, long, global = true)]
+    verbose: bool,
 }
 
 #[derive(Subcommand)]
@@ -68,13 +72,19 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    // Events go to stderr as filtered by RUST_LOG, and to the MCAP/Foxglove log of the run being
-    // stepped on the same thread, if any (sim::viz::logs).
-    let stderr = tracing_subscriber::fmt::layer()
-        .with_writer(std::io::stderr)
-        .with_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()));
-    tracing_subscriber::registry().with(stderr).with(sim::viz::logs::layer()).init();
-    let result = match Cli::parse().command.unwrap_or(Command::Run(RunArgs::default_room())) {
+    let cli = Cli::parse();
+    // Events go to stderr as filtered by RUST_LOG (or -v: every INFO line; by default warnings,
+    // the robot programs' left out), to the MCAP/Foxglove log of the run being stepped on the
+    // same thread, if any (sim::viz::logs), and to `explobot run`'s log.txt (sim::runlog).
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| if cli.verbose { "info".into() } else { "warn,carto=off,cute=off".into() });
+    let stderr = tracing_subscriber::fmt::layer().with_writer(std::io::stderr).with_filter(filter);
+    tracing_subscriber::registry()
+        .with(stderr)
+        .with(sim::viz::logs::layer())
+        .with(sim::runlog::layer())
+        .init();
+    let result = match cli.command.unwrap_or(Command::Run(RunArgs::default_room())) {
         Command::Run(args) if args.wants_window() && args.known.oracle() != Oracle::None => {
             Err(anyhow::anyhow!(
                 "--known-room and --known-echoes are for headless runs and sweeps, not the window"
@@ -193,11 +203,23 @@ fn run(args: RunArgs) -> Result<ExitCode> {
     let loaded = LoadedScenario::load_or_default(args.scenario.as_deref())?.with_oracle(args.known.oracle());
     let out = args.out.unwrap_or_else(|| output::default_out_dir(&loaded.scenario.name));
     let mcap = args.mcap.as_deref().map(|p| (p, args.mcap_lz4));
-    let (run, wall, recorder) = run_headless(loaded, args.seed, args.quiet, mcap)?;
+    sim::runlog::start();
+    let headless = run_headless(loaded, args.seed, args.quiet, mcap);
+    let log = sim::runlog::take();
+    let (run, wall, recorder) = headless?;
     let report = run.report(wall);
     output::print_stdout(&report.to_text())?;
     output::write_outputs(&out, &run, &report)?;
-    output::print_stdout(&format!("wrote {}/report.json, map.png, links.rec\n", out.display()))?;
+    let log_path = out.join("log.txt");
+    std::fs::write(&log_path, log.text()).with_context(|| format!("writing {}", log_path.display()))?;
+    output::print_stdout(&format!(
+        "log             {} lines from Carto and Cute ({} warnings, {} errors) in {} (-v shows them here)\n",
+        log.lines.len() as u64 + log.dropped,
+        log.warnings,
+        log.errors,
+        log_path.display()
+    ))?;
+    output::print_stdout(&format!("wrote {}/report.json, map.png, links.rec, log.txt\n", out.display()))?;
     finish_mcap(recorder, &run, &report, mcap)?;
     Ok(if report.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

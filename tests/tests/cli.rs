@@ -204,3 +204,26 @@ fn a_closed_standard_output_is_not_an_error() {
     assert!(run.join("report.json").exists() && run.join("links.rec").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Carto's and Cute's log lines go to the run folder's log.txt, counted in the report, and to the
+/// terminal only with `-v` (RUST_LOG left unset here).
+#[test]
+fn the_robot_programs_log_goes_to_log_txt_and_to_the_terminal_only_with_v() {
+    let dir = std::env::temp_dir().join(format!("explobot-cli-log-{}", std::process::id()));
+    let quiet =
+        explobot().env_remove("RUST_LOG").args(["run", "--quiet", "--out"]).arg(&dir).output().unwrap();
+    assert_eq!(quiet.status.code(), Some(0), "{}", String::from_utf8_lossy(&quiet.stderr));
+    let (stdout, stderr) = (String::from_utf8_lossy(&quiet.stdout), String::from_utf8_lossy(&quiet.stderr));
+    assert!(
+        !stderr.contains("carto::") && !stderr.contains("cute::"),
+        "robot lines on the terminal: {stderr}"
+    );
+    let log = std::fs::read_to_string(dir.join("log.txt")).unwrap();
+    let lines = log.lines().count();
+    assert!(log.contains(" INFO carto::") && lines > 10, "{log}");
+    assert!(stdout.contains(&format!("log             {lines} lines from Carto and Cute")), "{stdout}");
+    let loud =
+        explobot().env_remove("RUST_LOG").args(["run", "-v", "--quiet", "--out"]).arg(&dir).output().unwrap();
+    assert!(String::from_utf8_lossy(&loud.stderr).contains("carto::"), "-v shows them");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -214,18 +214,3 @@ fn every_path_the_readme_and_the_docs_name_exists() {
     }
     assert!(missing.is_empty(), "paths that do not exist:\n{}", missing.join("\n"));
 }
-
-/// `a/b/../c` → `a/c`.
-fn normalise(path: &Path) -> PathBuf {
-    let mut out = PathBuf::new();
-    for part in path.components() {
-        match part {
-            std::path::Component::ParentDir => {
-                out.pop();
-            }
-            std::path::Component::CurDir => {}
-            other => out.push(other),
-        }
-    }
-    out
-}
