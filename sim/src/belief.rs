@@ -40,7 +40,7 @@ use robot_model::grid::GridFrame;
 use robot_model::pose::Pose2;
 use serde::{Deserialize, Serialize};
 
-use crate::localisation::carto_belief;
+use crate::localisation::{angle_between, carto_belief};
 
 /// The figures of a run's belief samples (see the module docs).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -118,12 +118,6 @@ pub fn percentile(values: &[f64], q: f64) -> f64 {
     sorted.sort_by(f64::total_cmp);
     let rank = (q * sorted.len() as f64).ceil() as usize;
     sorted[rank.clamp(1, sorted.len()) - 1]
-}
-
-/// The absolute angle between two directions, radians in 0..=π.
-fn angle_between(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
 }
 
 #[cfg(test)]

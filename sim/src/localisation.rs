@@ -67,7 +67,8 @@ impl Localisation {
         let (row, col, heading) = believed;
         let (cx, cy) = frame.cell_center(usize::from(row), usize::from(col));
         let position = f64::from((pose.x - cx).hypot(pose.y - cy));
-        let heading_error = f64::from(angle_between(pose.theta, heading.world_angle()).to_degrees());
+        let heading_error =
+            angle_between(f64::from(pose.theta), f64::from(heading.world_angle())).to_degrees();
         self.samples += 1;
         tracing::trace!(
             t_s,
@@ -90,9 +91,9 @@ impl Localisation {
 }
 
 /// The absolute angle between two directions, radians in 0..=π.
-fn angle_between(a: f32, b: f32) -> f32 {
-    let d = (a - b).rem_euclid(std::f32::consts::TAU);
-    d.min(std::f32::consts::TAU - d)
+pub(crate) fn angle_between(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
 }
 
 #[cfg(test)]
@@ -129,8 +130,8 @@ mod tests {
 
     #[test]
     fn heading_errors_wrap_around_the_circle() {
-        assert!((angle_between(179f32.to_radians(), -179f32.to_radians()).to_degrees() - 2.0).abs() < 1e-3);
-        assert!((angle_between(0.0, std::f32::consts::PI) - std::f32::consts::PI).abs() < 1e-6);
+        assert!((angle_between(179f64.to_radians(), -179f64.to_radians()).to_degrees() - 2.0).abs() < 1e-3);
+        assert!((angle_between(0.0, std::f64::consts::PI) - std::f64::consts::PI).abs() < 1e-6);
         // Believed SOUTH (−90°), truly facing −88° plus a full turn.
         let frame = GridFrame::for_bounds((0.0, 0.0), (0.3, 0.3), 0.3);
         let mut l = Localisation::default();

@@ -213,6 +213,13 @@ mod tests {
         (truth, set)
     }
 
+    /// Two posts on the line between cells 0 and 1 that leave the body `beside_m` on each side.
+    fn posts(beside_m: f32) -> String {
+        let gap = 0.24 + 2.0 * beside_m;
+        let (y0, y1) = (0.225 - gap / 2.0, 0.225 + gap / 2.0);
+        format!("Segment(from: (0.45, 0.0), to: (0.45, {y0})), Segment(from: (0.45, {y1}), to: (0.45, 0.45))")
+    }
+
     #[test]
     fn an_open_corridor_is_all_scored() {
         let (_, set) = corridor("", 3);
@@ -226,12 +233,7 @@ mod tests {
         // Two posts narrow the way into cell 1: the gap is the body's width (0.24 m) plus 1 cm
         // on each side, so the body passes 1 cm from each post (the zero-clearance truth lets
         // it through) but cannot keep 2 cm. Everything behind the narrow way is tight too.
-        let gap = 0.24 + 2.0 * 0.01;
-        let (y0, y1) = (0.225 - gap / 2.0, 0.225 + gap / 2.0);
-        let posts = format!(
-            "Segment(from: (0.45, 0.0), to: (0.45, {y0})), Segment(from: (0.45, {y1}), to: (0.45, 0.45))"
-        );
-        let (truth, set) = corridor(&posts, 3);
+        let (truth, set) = corridor(&posts(0.01), 3);
         assert_eq!(truth.reachable_from((0, 0)), vec![true; 3], "the zero-clearance truth passes");
         assert_eq!(set.scored, vec![true, false, false]);
         assert_eq!(set.tight, vec![false, true, true], "the cell behind the only tight entry is tight");
@@ -247,12 +249,7 @@ mod tests {
     #[test]
     fn a_gap_that_keeps_the_clearance_is_scored() {
         // The same narrow way, 3 cm on each side: scored.
-        let gap = 0.24 + 2.0 * 0.03;
-        let (y0, y1) = (0.225 - gap / 2.0, 0.225 + gap / 2.0);
-        let posts = format!(
-            "Segment(from: (0.45, 0.0), to: (0.45, {y0})), Segment(from: (0.45, {y1}), to: (0.45, 0.45))"
-        );
-        let (_, set) = corridor(&posts, 3);
+        let (_, set) = corridor(&posts(0.03), 3);
         assert_eq!(set.scored, vec![true; 3]);
     }
 }

@@ -114,7 +114,7 @@ impl TruthCounts {
     pub fn with_set(loaded: &LoadedScenario, set: &ScoredSet) -> TruthCounts {
         let t = loaded.truth();
         let start = (usize::from(loaded.scenario.start.row), usize::from(loaded.scenario.start.col));
-        let reachable = t.reachable_from(start);
+        let reachable = &set.reachable;
         let cells = || (0..t.rows).flat_map(|r| (0..t.cols).map(move |c| (r, c)));
         let mut blocked_moves = 0;
         for (r, c) in cells() {
@@ -129,7 +129,7 @@ impl TruthCounts {
         let slide =
             crate::truth::turnable_after_slide(t.frame, &s.room, &s.obstacle_shapes(), &loaded.profile);
         let visits = t.visits_with(start, start_heading, |r, c| slide[r * t.cols + c]);
-        let count = |v: &[bool]| v.iter().zip(&reachable).filter(|&(&a, &b)| a && b).count();
+        let count = |v: &[bool]| v.iter().zip(reachable).filter(|&(&a, &b)| a && b).count();
         TruthCounts {
             visitable: count(&visits.visitable),
             round_trip: count(&visits.round_trip),

@@ -90,17 +90,27 @@ fn jobs_and_shards_do_not_change_the_results() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `scenarios/empty.ron`'s text with its robot profile named by an absolute path, so a copy runs
+/// from any folder.
+fn empty_room_anywhere() -> String {
+    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
+    let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
+    let robot = scenarios.join("robots/mecanum-4wd.ron").display().to_string();
+    let text = text.replace("\"robots/mecanum-4wd.ron\"", &format!("{robot:?}"));
+    assert!(text.contains(&robot));
+    text
+}
+
+/// empty.ron's finish limit, and one no run can meet.
+const HURRIED: (&str, &str) = ("finish_within_s: Some(600.0)", "finish_within_s: Some(5.0)");
+
 #[test]
 fn a_failing_run_exits_1_and_names_its_rerun_command() {
     let dir = temp("fail");
     // empty.ron with a finish limit no run can meet.
-    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
-    let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
-    let robot = scenarios.join("robots/mecanum-4wd.ron").display().to_string();
-    let text = text
-        .replace("finish_within_s: Some(600.0)", "finish_within_s: Some(5.0)")
-        .replace("\"robots/mecanum-4wd.ron\"", &format!("{robot:?}"));
-    assert!(text.contains("Some(5.0)") && text.contains(&robot));
+    let text = empty_room_anywhere();
+    let text = text.replace(HURRIED.0, HURRIED.1);
+    assert!(text.contains("Some(5.0)"));
     let file = dir.join("hurried.ron");
     std::fs::write(&file, text).unwrap();
     let out =
@@ -121,17 +131,13 @@ fn a_failing_run_exits_1_and_names_its_rerun_command() {
 #[test]
 fn sweep_compare_lists_a_known_flip_and_the_same_link_bytes() {
     let dir = temp("compare");
-    let scenarios = std::fs::canonicalize("../scenarios").unwrap();
-    let text = std::fs::read_to_string(scenarios.join("empty.ron")).unwrap();
-    let robot = scenarios.join("robots/mecanum-4wd.ron").display().to_string();
-    let text = text.replace("\"robots/mecanum-4wd.ron\"", &format!("{robot:?}"));
+    let text = empty_room_anywhere();
     let file = dir.join("room.ron");
     let file_arg = file.to_str().unwrap();
     std::fs::write(&file, &text).unwrap();
     let old = sweep(&[file_arg, "--seeds", "1..2", "--quiet"], &dir.join("old"));
     assert_eq!(old.status.code(), Some(0), "{}", String::from_utf8_lossy(&old.stderr));
-    std::fs::write(&file, text.replace("finish_within_s: Some(600.0)", "finish_within_s: Some(5.0)"))
-        .unwrap();
+    std::fs::write(&file, text.replace(HURRIED.0, HURRIED.1)).unwrap();
     let new = sweep(&[file_arg, "--seeds", "1..2", "--quiet"], &dir.join("new"));
     assert_eq!(new.status.code(), Some(1));
     let summary = std::fs::read_to_string(dir.join("new/summary.md")).unwrap();

@@ -54,18 +54,23 @@ pub fn mcnemar_exact_p(b: usize, c: usize) -> f64 {
     (2.0 * tail).min(1.0)
 }
 
-/// "12 of 600 (2.0 %, Wilson 95 % 1.1–3.5 %)".
-pub fn pass_rate_text(k: usize, n: usize) -> String {
+/// The pass rate of `k` of `n` and its Wilson 95 % interval, in per cent.
+fn rate_pct(k: usize, n: usize) -> (f64, f64, f64) {
     let (lo, hi) = wilson_95(k, n);
     let pct = if n == 0 { 0.0 } else { 100.0 * k as f64 / n as f64 };
-    format!("{k} of {n} ({pct:.1} %, Wilson 95 % {:.1}–{:.1} %)", 100.0 * lo, 100.0 * hi)
+    (pct, 100.0 * lo, 100.0 * hi)
+}
+
+/// "12 of 600 (2.0 %, Wilson 95 % 1.1–3.5 %)".
+pub fn pass_rate_text(k: usize, n: usize) -> String {
+    let (pct, lo, hi) = rate_pct(k, n);
+    format!("{k} of {n} ({pct:.1} %, Wilson 95 % {lo:.1}–{hi:.1} %)")
 }
 
 /// A table cell: "12 (2.0 %, 1.1–3.5 %)".
 pub fn pass_cell(k: usize, n: usize) -> String {
-    let (lo, hi) = wilson_95(k, n);
-    let pct = if n == 0 { 0.0 } else { 100.0 * k as f64 / n as f64 };
-    format!("{k} ({pct:.1} %, {:.1}–{:.1} %)", 100.0 * lo, 100.0 * hi)
+    let (pct, lo, hi) = rate_pct(k, n);
+    format!("{k} ({pct:.1} %, {lo:.1}–{hi:.1} %)")
 }
 
 /// The continuous figures of a set of runs (those with a report).
