@@ -17,15 +17,15 @@
 //! because it gives the same path whenever a known detour is nearly as short, and explores
 //! otherwise, with one search instead of two.
 //!
-//! Blocked moves: a FORWARD Carto refuses into a cell the robot has stood in does not make that
-//! cell an obstacle (the robot stood there, so it fits). What was met lies between the two cells
-//! (a thin wall on the cell line, a table leg on the corner, or an echo Carto keeps), so the
-//! *move* is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), and A* and
-//! the unreachable flood go round it; other ways into the cell stay open. A blocked move is not
-//! tried again until the map is reset: the sweep must end, and Carto would refuse it again for
-//! the same echo. A FORWARD refused into a cell nobody has stood in still makes the cell an
-//! obstacle: one refusal cannot tell a thin wall from a box, so that cell is not entered from
-//! elsewhere either.
+//! Refusals stay refusals: a FORWARD Carto refuses (SET_OBSTACLE_POSITION) says the *move*
+//! could not be made safely, not that the cell ahead is occupied. What was met may lie between
+//! the two cells (a thin wall on the cell line, a table leg on the corner, an echo Carto keeps),
+//! so the move is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), the
+//! cell keeps its value, and A* and the unreachable flood go round the move: the cell is tried
+//! again from its other sides. A blocked move is not tried again until the map is reset: the
+//! sweep must end, and Carto would refuse it again for the same echo. A cell nobody has stood in
+//! becomes an obstacle only when the unreachable flood (below) finds every way into it that the
+//! robot could try refused: a cell concluded unreachable with a refused move into it.
 //!
 //! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
 //! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
@@ -57,11 +57,11 @@
 //! let mut map = Map::new(1, 3).unwrap();
 //! map.set_robot(0, 0).unwrap();
 //! let mut carto = Cartographer::new(1, 3, (0, 0), Heading::East).unwrap();
-//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
+//! assert_eq!(carto.next_command(&mut map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Moved { x: 0, y: 1 });
-//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
+//! assert_eq!(carto.next_command(&mut map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Blocked { x: 0, y: 2 });
-//! assert_eq!(carto.next_command(&map), None); // done
+//! assert_eq!(carto.next_command(&mut map), None); // done
 //! assert_eq!(map.to_text(), "150\n");
 //! ```
 
@@ -330,7 +330,7 @@ impl Cartographer {
     /// The next command to execute, or `None` when the sweep is complete. Until
     /// [`Cartographer::on_result`] is called, it keeps returning the same command (re-send it
     /// after a reconnect).
-    pub fn next_command(&mut self, map: &Map) -> Option<Move> {
+    pub fn next_command(&mut self, map: &mut Map) -> Option<Move> {
         if let Some(c) = self.pending {
             return Some(c);
         }
@@ -489,7 +489,7 @@ impl Cartographer {
     }
 
     /// Marks every unknown cell the robot cannot reach through non-blocked cells and moves.
-    fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
+    fn mark_unreachable(&mut self, map: &mut Map, target: (u8, u8)) {
         let before = self.stats.unreachable;
         self.flood_seen.fill(false);
         self.flood_stack.clear();
@@ -516,13 +516,22 @@ impl Cartographer {
         for i in 0..self.rows * self.cols {
             let c = ((i / self.cols) as u8, (i % self.cols) as u8);
             if !self.flood_seen[i] && !self.unreachable[i] && self.classify(map, c) == Known::Unknown {
+                // Every way in the robot could try was refused: the evidence of an obstacle.
+                if map.has_blocked_move(c) && map.set_obstacle(usize::from(c.0), usize::from(c.1)).is_ok() {
+                    continue;
+                }
                 self.unreachable[i] = true;
                 newly += 1;
             }
         }
         self.stats.unreachable += newly;
         // The search failed, so the target must be among them; make sure progress is made.
-        self.give_up(target);
+        if self.classify(map, target) == Known::Unknown {
+            self.give_up(target);
+        } else {
+            self.target = None;
+            self.plan.clear();
+        }
         debug!(?target, newly = self.stats.unreachable - before, "cells concluded unreachable");
     }
 
@@ -597,7 +606,7 @@ impl Cartographer {
                 // Outside the map nothing is written, and needs not be: it is never planned.
                 if map.note_refused_forward(self.pose, (x, y)) == (Refusal::MoveBlocked { new: true }) {
                     self.stats.blocked_moves += 1;
-                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
+                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell keeps its value");
                 }
                 self.plan.clear();
             }
@@ -651,11 +660,11 @@ mod tests {
 
     #[test]
     fn pending_command_repeats_until_answered() {
-        let map = Map::new(2, 2).unwrap();
+        let mut map = Map::new(2, 2).unwrap();
         let mut c = Cartographer::new(2, 2, (0, 0), Heading::South).unwrap();
-        let first = c.next_command(&map).unwrap();
+        let first = c.next_command(&mut map).unwrap();
         assert_eq!(first, Move::Left); // face EAST towards (0, 1)
-        assert_eq!(c.next_command(&map), Some(first));
+        assert_eq!(c.next_command(&mut map), Some(first));
         assert_eq!(c.stats().commands, 1);
     }
 
@@ -667,7 +676,7 @@ mod tests {
             map.set_obstacle(x, y).unwrap();
         }
         let mut c = Cartographer::new(3, 3, (1, 1), Heading::East).unwrap();
-        assert_eq!(c.next_command(&map), None);
+        assert_eq!(c.next_command(&mut map), None);
         assert!(c.is_done());
         assert_eq!(c.unreachable_cells(), vec![(0, 0), (0, 2), (2, 0), (2, 2)]);
         assert_eq!(c.stats().searches, 1);
@@ -689,8 +698,8 @@ mod tests {
         c.on_result(&mut map, MoveResult::Blocked { x: 1, y: 2 });
         assert_eq!(c.heading(), Heading::East);
         assert_eq!(c.stats().heading_resyncs, 1);
-        assert_eq!(map.at((1, 2)), Some(CellValue::Obstacle));
-        assert_eq!(map.at((2, 1)), Some(CellValue::Unknown), "the cell south was not touched");
+        assert!(map.is_move_blocked((1, 1), (1, 2)), "the move east is blocked");
+        assert!(!map.is_move_blocked((1, 1), (2, 1)), "the move south was not touched");
     }
 
     /// Generated flat seed 10 (issue 10): a RIGHT that jammed every time, asked again after every
@@ -714,11 +723,11 @@ mod tests {
         // only the cell south is left to map: three LEFTs instead of the RIGHT that failed
         map.set(2, 1, CellValue::Unknown).unwrap();
         for expected in [Heading::North, Heading::West, Heading::South] {
-            assert_eq!(c.next_command(&map), Some(Move::Left));
+            assert_eq!(c.next_command(&mut map), Some(Move::Left));
             c.on_result(&mut map, MoveResult::Turned);
             assert_eq!(c.heading(), expected);
         }
-        assert_eq!(c.next_command(&map), Some(Move::Forward));
+        assert_eq!(c.next_command(&mut map), Some(Move::Forward));
     }
 
     /// A 2 × 2 area with (0, 0) mapped, the robot in (0, 1) facing EAST (the grid's edge) and
@@ -740,7 +749,7 @@ mod tests {
     fn a_robot_that_cannot_turn_and_faces_the_edge_ends_the_sweep() {
         let (mut map, mut c) = at_the_east_edge();
         let mut sent = Vec::new();
-        while let Some(cmd) = c.next_command(&map) {
+        while let Some(cmd) = c.next_command(&mut map) {
             sent.push(cmd);
             assert!(sent.len() <= 20, "no end: {sent:?}");
             let result = if cmd.is_turn() { MoveResult::Turned } else { MoveResult::NotExecuted };
@@ -759,12 +768,12 @@ mod tests {
     #[test]
     fn one_refused_forward_after_a_turn_keeps_the_turn() {
         let (mut map, mut c) = at_the_east_edge();
-        assert_eq!(c.next_command(&map), Some(Move::Right));
+        assert_eq!(c.next_command(&mut map), Some(Move::Right));
         c.on_result(&mut map, MoveResult::Turned);
-        assert_eq!(c.next_command(&map), Some(Move::Forward));
+        assert_eq!(c.next_command(&mut map), Some(Move::Forward));
         c.on_result(&mut map, MoveResult::NotExecuted);
         assert_eq!((c.heading(), c.stats().turns_failed), (Heading::South, 0));
-        assert_eq!(c.next_command(&map), Some(Move::Forward));
+        assert_eq!(c.next_command(&mut map), Some(Move::Forward));
         c.on_result(&mut map, MoveResult::Moved { x: 1, y: 1 });
         assert_eq!((c.pose(), c.heading(), c.stats().heading_resyncs), ((1, 1), Heading::South, 0));
     }
@@ -835,15 +844,48 @@ mod tests {
         assert_eq!(map.to_text(), "215\n");
     }
 
-    /// A FORWARD refused into a cell nobody has stood in still makes it an obstacle.
+    /// A FORWARD refused into a cell nobody has stood in blocks the move; the cell becomes an
+    /// obstacle only when that was the last way in.
     #[test]
-    fn a_refused_forward_into_an_unknown_cell_marks_an_obstacle() {
+    fn a_refused_forward_into_an_unknown_cell_blocks_the_move_until_no_way_in_is_left() {
+        // 1 x 2: the only way into (0, 1) is refused, so it is an obstacle.
         let mut map = Map::new(1, 2).unwrap();
         map.set_robot(0, 0).unwrap();
         let mut c = Cartographer::new(1, 2, (0, 0), Heading::East).unwrap();
         assert_eq!(drive(&mut c, &mut map, |_, _| false), vec![((0, 0), (0, 1))]);
         assert_eq!(map.to_text(), "50\n");
-        assert_eq!(map.blocked_moves().count(), 0);
+        assert_eq!(map.blocked_moves().count(), 1);
+    }
+
+    /// Carto refuses the move (0, 0) -> (0, 1) only (a leg on the cell line): the cell is
+    /// reached from below, and so is everything behind it.
+    #[test]
+    fn a_cell_refused_from_one_side_is_entered_from_another() {
+        let mut map = Map::new(2, 3).unwrap();
+        map.set_robot(0, 0).unwrap();
+        let mut c = Cartographer::new(2, 3, (0, 0), Heading::East).unwrap();
+        let exists = |from, to| !(from == (0, 0) && to == (0, 1));
+        let forwards = drive(&mut c, &mut map, exists);
+        let refused: Vec<_> = forwards.into_iter().filter(|&(f, t)| !exists(f, t)).collect();
+        assert_eq!(refused, vec![((0, 0), (0, 1))]);
+        assert_eq!(map.count(CellValue::Obstacle), 0);
+        assert_eq!(map.count(CellValue::Unknown), 0, "{}", map.to_text());
+        assert!(map.is_move_blocked((0, 0), (0, 1)));
+        assert!(c.unreachable_cells().is_empty());
+    }
+
+    /// Refused from both sides it can be entered from, the cell is an obstacle; the other cells
+    /// are all mapped.
+    #[test]
+    fn a_cell_refused_from_every_side_is_an_obstacle() {
+        let mut map = Map::new(2, 3).unwrap();
+        map.set_robot(0, 0).unwrap();
+        let mut c = Cartographer::new(2, 3, (0, 0), Heading::East).unwrap();
+        let forwards = drive(&mut c, &mut map, |_, to| to != (0, 1));
+        let refused: Vec<_> = forwards.into_iter().filter(|&(_, t)| t == (0, 1)).collect();
+        assert_eq!(refused.len(), 3, "{refused:?}");
+        assert_eq!(map.at((0, 1)), Some(CellValue::Obstacle));
+        assert_eq!(map.count(CellValue::Unknown), 0, "{}", map.to_text());
     }
 
     #[test]

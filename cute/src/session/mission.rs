@@ -153,7 +153,7 @@ impl Mission {
     ) -> Next {
         match self {
             Mission::None => Next::Wait,
-            Mission::Mapping(m) => m.next(&belief.map, now + timeout),
+            Mission::Mapping(m) => m.next(&mut belief.map, now + timeout),
             Mission::Moving(m) => m.next(belief, planner, now, timeout),
         }
     }
@@ -279,7 +279,7 @@ impl Mapping {
         }
     }
 
-    fn next(&mut self, map: &Map, deadline: Instant) -> Next {
+    fn next(&mut self, map: &mut Map, deadline: Instant) -> Next {
         if self.flight.is_some() {
             return Next::Wait;
         }
@@ -471,8 +471,9 @@ mod tests {
         assert_eq!(m.next(&mut b, &mut p, at(3), T), Next::Cartography(Move::Forward));
         assert_eq!(m.on_obstacle(&mut b, 0, 2), Obstacle::Recorded);
         assert_eq!(m.on_move_done(&mut b), Answer::Applied);
-        assert_eq!(b.map.get(0, 2), Some(CellValue::Obstacle));
+        assert_eq!(b.map.get(0, 2), Some(CellValue::Unknown), "a refusal blocks the move only");
         assert!(matches!(m.next(&mut b, &mut p, at(4), T), Next::Mapped(s) if s.commands == 2));
+        assert_eq!(b.map.get(0, 2), Some(CellValue::Obstacle), "the only way in was refused");
     }
 
     #[test]
