@@ -4,6 +4,7 @@
 pub mod backoff;
 mod carto;
 pub mod config;
+pub mod estimate;
 pub mod fuzzing;
 pub mod motor;
 pub mod odometry;

@@ -1,0 +1,59 @@
+//! The cost of Carto's world model on this machine: one sonar update of the evidence grid (an
+//! echo near, at mid range and at the sonar's limit, and a reading with no echo) and the shape
+//! queries the pilot asks before a move (the corridor of one FORWARD, the turning circle).
+//!
+//! Carto's control cycle is 60 ms and the Raspberry Pi 4 is about 5–8 times slower than a
+//! desktop core, so an update must stay well under a millisecond here.
+//!
+//! `cargo bench -p carto --bench estimate`
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+use carto::estimate::grid::{EvidenceGrid, GridParams};
+use carto::estimate::sonar::{Reading, SonarModel};
+use carto::surroundings::Pose2;
+
+/// A grid that has seen a 4 × 4 m room from its middle, every 10°.
+fn seen_room() -> EvidenceGrid {
+    let (mut grid, model) = (EvidenceGrid::new(GridParams::default()), SonarModel::default());
+    for k in 0..36 {
+        let pose = Pose2 { x: 2.0, y: 2.0, yaw_deg: f64::from(k) * 10.0 };
+        model.update(&mut grid, pose, Reading::Echo(1.9));
+    }
+    grid
+}
+
+fn sonar_update(c: &mut Criterion) {
+    let model = SonarModel::default();
+    let mut grid = seen_room();
+    let pose = Pose2 { x: 2.0, y: 2.0, yaw_deg: 30.0 };
+    let mut group = c.benchmark_group("sonar_update");
+    for (name, reading) in [
+        ("echo_0.5m", Reading::Echo(0.5)),
+        ("echo_2m", Reading::Echo(2.0)),
+        ("echo_4m", Reading::Echo(4.0)),
+        ("no_echo", Reading::NoEcho),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter(|| model.update(&mut grid, black_box(pose), black_box(reading)))
+        });
+    }
+    group.finish();
+}
+
+fn queries(c: &mut Criterion) {
+    let grid = seen_room();
+    let pose = Pose2 { x: 2.0, y: 2.0, yaw_deg: 90.0 };
+    let mut group = c.benchmark_group("query");
+    // One FORWARD of a 0.45 m cell: front face to front face, body 24 cm wide plus 2 cm a side.
+    group.bench_function("corridor", |b| {
+        b.iter(|| grid.first_occupied_in_rect(black_box(pose), 0.13, 0.58, 0.14))
+    });
+    // The turning circle: half the body's diagonal plus 2 cm.
+    group.bench_function("turning_circle", |b| b.iter(|| grid.classify_circle(black_box((2.0, 2.0)), 0.19)));
+    group.finish();
+}
+
+criterion_group!(benches, sonar_update, queries);
+criterion_main!(benches);

@@ -1,0 +1,9 @@
+//! Carto's estimate of the world: the evidence grid and the sonar's sensor model that feeds it
+//! (style rule 16).
+//!
+//! - [`grid`]: a bounded log-odds occupancy grid in Carto's metric frame, with shape queries
+//!   (a corridor, a turning circle, a footprint) that answer free, occupied or unknown.
+//! - [`sonar`]: how one sonar reading, echo or silence, changes the grid.
+
+pub mod grid;
+pub mod sonar;
