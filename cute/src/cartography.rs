@@ -17,15 +17,15 @@
 //! because it gives the same path whenever a known detour is nearly as short, and explores
 //! otherwise, with one search instead of two.
 //!
-//! Refusals stay refusals: a FORWARD Carto refuses (SET_OBSTACLE_POSITION) says the *move*
-//! could not be made safely, not that the cell ahead is occupied. What was met may lie between
-//! the two cells (a thin wall on the cell line, a table leg on the corner, an echo Carto keeps),
-//! so the move is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), the
-//! cell keeps its value, and A* and the unreachable flood go round the move: the cell is tried
-//! again from its other sides. A blocked move is not tried again until the map is reset: the
-//! sweep must end, and Carto would refuse it again for the same echo. A cell nobody has stood in
-//! becomes an obstacle only when the unreachable flood (below) finds every way into it that the
-//! robot could try refused: a cell concluded unreachable with a refused move into it.
+//! Blocked moves: a FORWARD Carto refuses into a cell the robot has stood in does not make that
+//! cell an obstacle (the robot stood there, so it fits). What was met lies between the two cells
+//! (a thin wall on the cell line, a table leg on the corner, or an echo Carto keeps), so the
+//! *move* is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), and A* and
+//! the unreachable flood go round it; other ways into the cell stay open. A blocked move is not
+//! tried again until the map is reset: the sweep must end, and Carto would refuse it again for
+//! the same echo. A FORWARD refused into a cell nobody has stood in still makes the cell an
+//! obstacle: one refusal cannot tell a thin wall from a box, so that cell is not entered from
+//! elsewhere either.
 //!
 //! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
 //! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
@@ -57,11 +57,11 @@
 //! let mut map = Map::new(1, 3).unwrap();
 //! map.set_robot(0, 0).unwrap();
 //! let mut carto = Cartographer::new(1, 3, (0, 0), Heading::East).unwrap();
-//! assert_eq!(carto.next_command(&mut map), Some(Move::Forward));
+//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Moved { x: 0, y: 1 });
-//! assert_eq!(carto.next_command(&mut map), Some(Move::Forward));
+//! assert_eq!(carto.next_command(&map), Some(Move::Forward));
 //! carto.on_result(&mut map, MoveResult::Blocked { x: 0, y: 2 });
-//! assert_eq!(carto.next_command(&mut map), None); // done
+//! assert_eq!(carto.next_command(&map), None); // done
 //! assert_eq!(map.to_text(), "150\n");
 //! ```
 
@@ -329,7 +329,7 @@ impl Cartographer {
     /// The next command to execute, or `None` when the sweep is complete. Until
     /// [`Cartographer::on_result`] is called, it keeps returning the same command (re-send it
     /// after a reconnect).
-    pub fn next_command(&mut self, map: &mut Map) -> Option<Move> {
+    pub fn next_command(&mut self, map: &Map) -> Option<Move> {
         if let Some(c) = self.pending {
             return Some(c);
         }
@@ -529,7 +529,7 @@ impl Cartographer {
                 // Outside the map nothing is written, and needs not be: it is never planned.
                 if map.note_refused_forward(self.pose, (x, y)) == (Refusal::MoveBlocked { new: true }) {
                     self.stats.blocked_moves += 1;
-                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell keeps its value");
+                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
                 }
                 self.plan.clear();
             }

@@ -200,13 +200,15 @@ pub struct Map {
 /// What [`Map::note_refused_forward`] concluded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Refusal {
-    /// The move is blocked, both ways; the cell ahead keeps its value (free if the robot stood
-    /// there, unknown otherwise). `new` is false if the move was already known blocked.
+    /// The cell ahead is known free (the robot stood there): the move is blocked, the cell stays
+    /// free. `new` is false if the move was already known blocked.
     MoveBlocked {
         /// First time this move is blocked.
         new: bool,
     },
-    /// Nothing written: the cell is off the map, the robot's own cell, or already an obstacle.
+    /// The cell ahead was not known free: it is now an obstacle.
+    Obstacle,
+    /// Nothing written: the cell is off the map or the robot's own cell.
     Nothing,
 }
 
@@ -403,29 +405,26 @@ impl Map {
     }
 
     /// Carto refused a FORWARD from `from` into its neighbour `ahead` (SET_OBSTACLE_POSITION).
-    /// A refusal says the *move* could not be made safely, not that the cell is occupied: what
-    /// was met may lie between the two cells (a thin wall on the cell line, a table leg on the
-    /// corner), and the cell may well be entered from another side. So the move is blocked, both
-    /// ways, and the cell keeps its value. Cartography turns an unknown cell into an obstacle
-    /// only once every way into it the robot could try has been refused. The
-    /// robot's own cell, an obstacle and cells off the map are left alone.
+    /// A cell the map knows free had the robot in it, so the robot fits there: what was met lies
+    /// between the two cells, and the *move* is blocked. Any other cell becomes an obstacle: one
+    /// refusal cannot tell a thin wall from a box. The robot's own cell and cells off the map
+    /// are left alone.
     pub fn note_refused_forward(&mut self, from: (u8, u8), ahead: (u8, u8)) -> Refusal {
-        match self.at(ahead) {
-            None | Some(CellValue::Obstacle) => Refusal::Nothing,
-            Some(_) if ahead == from => Refusal::Nothing,
-            Some(_) => match self.block_move(from, ahead) {
-                Ok(new) => Refusal::MoveBlocked { new },
-                Err(_) => Refusal::Nothing,
-            },
+        let Some(value) = self.at(ahead) else {
+            return Refusal::Nothing;
+        };
+        if ahead == from {
+            return Refusal::Nothing;
         }
-    }
-
-    /// True if a move into or out of `cell` is blocked ([`Map::block_move`]).
-    pub fn has_blocked_move(&self, cell: (u8, u8)) -> bool {
-        Heading::ALL
-            .iter()
-            .filter_map(|h| h.step(cell, self.rows, self.cols))
-            .any(|n| self.is_move_blocked(cell, n))
+        if value.is_known_free() {
+            if let Ok(new) = self.block_move(from, ahead) {
+                return Refusal::MoveBlocked { new };
+            }
+        }
+        match self.set_obstacle(usize::from(ahead.0), usize::from(ahead.1)) {
+            Ok(()) => Refusal::Obstacle,
+            Err(_) => Refusal::Nothing,
+        }
     }
 
     /// The map as text: one line per row, one digit (the cell's number) per cell.

@@ -13,22 +13,18 @@ use cute::map::{CellValue, Map};
 use proptest::prelude::*;
 use robot_model::grid::{Heading, Move};
 
-/// Upper bound on commands per thing to learn: each reachable cell, and each move from one into
-/// a blocked cell (a refusal blocks the move, not the cell, so a blocked cell is learnt from
-/// every side it can be entered from). Measured over 3000 random rooms up to 11 x 11 with up to
-/// 45 % obstacles (`PROPTEST_CASES=3000`, 2026-11-28): worst 4.5, 99th percentile 3.8, mean 2.2.
+/// Upper bound on commands per cell to learn (reachable cells plus the obstacle cells next to
+/// them, which can only be learnt by bumping). Measured over 3000 random rooms up to 11 x 11
+/// with up to 45 % obstacles: worst 5.5, 99th percentile 3.7, mean 2.3; the named rooms below
+/// stay under 2.5.
 const MOVES_PER_CELL: f64 = 6.0;
 
 #[derive(Debug)]
 struct Report {
     moves: u64,
     reachable: usize,
-    /// Truly blocked cells 4-adjacent to a reachable cell: each needs at least one bump.
+    /// Truly blocked cells 4-adjacent to a reachable cell: each needs one bump.
     boundary: usize,
-    /// Moves from a reachable cell into a truly blocked one: each is refused at most once (a
-    /// refusal blocks the move, not the cell, so a blocked cell is tried from each side until
-    /// every way in is refused).
-    boundary_moves: usize,
     bumps: u64,
     unreachable: usize,
 }
@@ -52,17 +48,6 @@ fn run_world(name: &str, world: World, start: (u8, u8), heading: Heading) -> Rep
                 })
         })
         .count();
-    let boundary_moves = (0..rows * cols)
-        .filter(|&i| reachable[i])
-        .map(|i| {
-            let c = ((i / cols) as u8, (i % cols) as u8);
-            Heading::ALL
-                .iter()
-                .filter_map(|h| h.step(c, rows, cols))
-                .filter(|n| world.is_blocked(usize::from(n.0), usize::from(n.1)))
-                .count()
-        })
-        .sum();
     let mut map = Map::new(rows, cols).unwrap();
     map.set_robot(usize::from(start.0), usize::from(start.1)).unwrap();
     let mut carto = Cartographer::new(rows, cols, start, heading).unwrap();
@@ -70,7 +55,7 @@ fn run_world(name: &str, world: World, start: (u8, u8), heading: Heading) -> Rep
     let mut robot = FakeRobot::new(world.clone(), start, heading);
     // Hard stop far above any sane bound, so a livelock fails instead of hanging.
     let limit = 50 * (rows * cols) as u64 + 100;
-    while let Some(cmd) = carto.next_command(&mut map) {
+    while let Some(cmd) = carto.next_command(&map) {
         if cmd == Move::Forward {
             let ahead = carto.heading().step(carto.pose(), rows, cols);
             let ahead = ahead.expect("never drives off the map");
@@ -102,18 +87,16 @@ fn run_world(name: &str, world: World, start: (u8, u8), heading: Heading) -> Rep
         moves: robot.moves(),
         reachable: n_reachable,
         boundary,
-        boundary_moves,
         bumps: stats.bumps,
         unreachable: stats.unreachable,
     };
     println!(
-        "{name}: {rows}x{cols}, reachable {}, boundary {} ({} moves into it), moves {} ({:.2}/reachable, {:.2}/learnt), forwards {}, turns {}, bumps {}, searches {}, unreachable {}",
+        "{name}: {rows}x{cols}, reachable {}, boundary {}, moves {} ({:.2}/reachable, {:.2}/learnt), forwards {}, turns {}, bumps {}, searches {}, unreachable {}",
         report.reachable,
         report.boundary,
-        report.boundary_moves,
         report.moves,
         report.moves as f64 / report.reachable.max(1) as f64,
-        report.moves as f64 / (report.reachable + report.boundary_moves).max(1) as f64,
+        report.moves as f64 / (report.reachable + report.boundary).max(1) as f64,
         stats.forwards,
         stats.turns,
         stats.bumps,
@@ -121,19 +104,13 @@ fn run_world(name: &str, world: World, start: (u8, u8), heading: Heading) -> Rep
         stats.unreachable
     );
     assert_eq!(stats.commands, report.moves);
-    let bumps = stats.bumps as usize;
+    assert_eq!(stats.bumps as usize, report.boundary, "{name}: one bump per boundary cell");
     assert!(
-        (report.boundary..=report.boundary_moves).contains(&bumps),
-        "{name}: {bumps} bumps for {} boundary cells and {} moves into them",
-        report.boundary,
-        report.boundary_moves
-    );
-    assert!(
-        report.moves as f64 <= MOVES_PER_CELL * (report.reachable + report.boundary_moves) as f64,
-        "{name}: {} moves for {} reachable cells + {} moves into blocked ones",
+        report.moves as f64 <= MOVES_PER_CELL * (report.reachable + report.boundary) as f64,
+        "{name}: {} moves for {} reachable + {} boundary cells",
         report.moves,
         report.reachable,
-        report.boundary_moves
+        report.boundary
     );
     report
 }
@@ -265,7 +242,7 @@ fn cartography_results_match_the_map_values() {
     map.set_robot(0, 0).unwrap();
     let mut carto = Cartographer::new(2, 3, (0, 0), Heading::East).unwrap();
     let mut trace = Vec::new();
-    while let Some(cmd) = carto.next_command(&mut map) {
+    while let Some(cmd) = carto.next_command(&map) {
         let r = robot.execute(cmd);
         trace.push((cmd, r));
         carto.on_result(&mut map, r);

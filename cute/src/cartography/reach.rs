@@ -41,7 +41,7 @@ impl Cartographer {
     }
 
     /// Marks every unknown cell the robot cannot reach through non-blocked cells and moves.
-    pub(super) fn mark_unreachable(&mut self, map: &mut Map, target: (u8, u8)) {
+    pub(super) fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
         let before = self.stats.unreachable;
         self.flood_seen.fill(false);
         self.flood_stack.clear();
@@ -68,22 +68,13 @@ impl Cartographer {
         for i in 0..self.rows * self.cols {
             let c = ((i / self.cols) as u8, (i % self.cols) as u8);
             if !self.flood_seen[i] && !self.unreachable[i] && self.classify(map, c) == Known::Unknown {
-                // Every way in the robot could try was refused: the evidence of an obstacle.
-                if map.has_blocked_move(c) && map.set_obstacle(usize::from(c.0), usize::from(c.1)).is_ok() {
-                    continue;
-                }
                 self.unreachable[i] = true;
                 newly += 1;
             }
         }
         self.stats.unreachable += newly;
         // The search failed, so the target must be among them; make sure progress is made.
-        if self.classify(map, target) == Known::Unknown {
-            self.give_up(target);
-        } else {
-            self.target = None;
-            self.plan.clear();
-        }
+        self.give_up(target);
         debug!(?target, newly = self.stats.unreachable - before, "cells concluded unreachable");
     }
 }

@@ -153,7 +153,7 @@ impl Mission {
     ) -> Next {
         match self {
             Mission::None => Next::Wait,
-            Mission::Mapping(m) => m.next(&mut belief.map, now + timeout),
+            Mission::Mapping(m) => m.next(&belief.map, now + timeout),
             Mission::Moving(m) => m.next(belief, planner, now, timeout),
         }
     }
@@ -279,7 +279,7 @@ impl Mapping {
         }
     }
 
-    fn next(&mut self, map: &mut Map, deadline: Instant) -> Next {
+    fn next(&mut self, map: &Map, deadline: Instant) -> Next {
         if self.flight.is_some() {
             return Next::Wait;
         }
