@@ -330,8 +330,9 @@ impl EvidenceGrid {
     /// `half_width` either side.
     pub fn clear_rect(&mut self, pose: Pose2, from: f64, to: f64, half_width: f64) {
         // Only cells wholly inside are cleared: a cell half under the body may hold what it
-        // touches.
-        let inner = self.params.resolution_m * std::f64::consts::FRAC_1_SQRT_2;
+        // touches. A cell overlaps a rectangle shrunk by twice its half extent only if it lies
+        // wholly inside the rectangle.
+        let inner = 2.0 * self.half_extent(pose.yaw_deg);
         let cells = self.cells_in_rect(pose, from + inner, to - inner, half_width - inner);
         for c in cells {
             self.set_certain(c, false);
@@ -346,10 +347,17 @@ impl EvidenceGrid {
         out
     }
 
-    /// Every cell whose square may overlap the disc of `radius` round `centre`.
+    /// Half the extent of a cell's square along a heading of `yaw_deg` (and across it): half a
+    /// cell along the grid's axes, half its diagonal at 45°.
+    fn half_extent(&self, yaw_deg: f64) -> f64 {
+        let (sin, cos) = yaw_deg.to_radians().sin_cos();
+        self.params.resolution_m / 2.0 * (sin.abs() + cos.abs())
+    }
+
+    /// Every cell whose square overlaps the disc of `radius` round `centre`.
     pub fn cells_in_circle(&self, centre: (f64, f64), radius: f64) -> Vec<CellIndex> {
-        let pad = self.params.resolution_m * std::f64::consts::FRAC_1_SQRT_2;
-        let reach = radius + pad;
+        let half = self.params.resolution_m / 2.0;
+        let reach = radius + half;
         let (c0, c1) = (
             self.cell_of(centre.0 - reach, centre.1 - reach),
             self.cell_of(centre.0 + reach, centre.1 + reach),
@@ -358,7 +366,10 @@ impl EvidenceGrid {
         for i in c0.0..=c1.0 {
             for j in c0.1..=c1.1 {
                 let (x, y) = self.centre((i, j));
-                if (x - centre.0).powi(2) + (y - centre.1).powi(2) <= reach * reach {
+                if (((x - centre.0).abs() - half).max(0.0)).powi(2)
+                    + (((y - centre.1).abs() - half).max(0.0)).powi(2)
+                    <= radius * radius
+                {
                     out.push((i, j));
                 }
             }
@@ -367,8 +378,8 @@ impl EvidenceGrid {
     }
 
     /// Calls `visit` with every cell whose square may overlap the rectangle from `from` to `to`
-    /// along `pose`'s heading, `half_width` either side (its centre within half a cell's
-    /// diagonal of it), and the cell centre's distance along the heading.
+    /// along `pose`'s heading, `half_width` either side, and the cell centre's distance along
+    /// the heading.
     fn for_rect(
         &self,
         pose: Pose2,
@@ -380,7 +391,9 @@ impl EvidenceGrid {
         if to < from || half_width < 0.0 {
             return;
         }
-        let pad = self.params.resolution_m * std::f64::consts::FRAC_1_SQRT_2;
+        // Separating axes along and across the heading: exact for the grid's own headings,
+        // conservative between them.
+        let pad = self.half_extent(pose.yaw_deg);
         let (sin, cos) = pose.yaw_deg.to_radians().sin_cos();
         let corners = [(from, -half_width), (from, half_width), (to, -half_width), (to, half_width)]
             .map(|(a, l)| (pose.x + a * cos - l * sin, pose.y + a * sin + l * cos));
@@ -414,6 +427,19 @@ impl EvidenceGrid {
             .map(|c| self.cell(c))
             .max()
             .unwrap_or(Occupancy::Free)
+    }
+
+    /// The centre of the occupied cell nearest `centre` among those overlapping the disc of
+    /// `radius` round it, if any.
+    pub fn nearest_occupied_in_circle(&self, centre: (f64, f64), radius: f64) -> Option<(f64, f64)> {
+        self.cells_in_circle(centre, radius)
+            .into_iter()
+            .filter(|&c| self.cell(c) == Occupancy::Occupied)
+            .map(|c| self.centre(c))
+            .min_by(|a, b| {
+                let d = |p: &(f64, f64)| (p.0 - centre.0).powi(2) + (p.1 - centre.1).powi(2);
+                d(a).total_cmp(&d(b)).then(a.0.total_cmp(&b.0)).then(a.1.total_cmp(&b.1))
+            })
     }
 
     /// The centre of the occupied cell nearest along the heading in the rectangle, if any: what
@@ -532,6 +558,15 @@ mod tests {
     }
 
     #[test]
+    fn rect_queries_along_the_grid_take_exactly_the_cells_that_overlap() {
+        let g = EvidenceGrid::new(GridParams::default());
+        let cells = g.cells_in_rect(east(0.0, 0.0), 0.0, 0.2, 0.1);
+        assert!(cells.contains(&g.cell_of(0.05, 0.11)), "the cell from 0.10 to 0.12 touches the edge");
+        assert!(!cells.contains(&g.cell_of(0.05, 0.13)), "the cell from 0.12 to 0.14 does not");
+        assert!(!cells.contains(&g.cell_of(0.23, 0.0)), "nor the cell from 0.22 to 0.24 beyond the end");
+    }
+
+    #[test]
     fn clearing_a_rect_leaves_the_cells_half_under_its_edge() {
         let mut g = EvidenceGrid::new(GridParams::default());
         g.mark_segment((0.30, -0.2), (0.30, 0.2)); // a wall across, 30 cm ahead
@@ -551,6 +586,9 @@ mod tests {
         g.mark_segment((1.14, 1.14), (1.14, 1.14)); // 19.8 cm from the centre
         assert_eq!(g.classify_circle((1.0, 1.0), 0.19), Occupancy::Occupied);
         assert_eq!(g.classify_circle((1.0, 1.0), 0.15), Occupancy::Free);
+        let near = g.nearest_occupied_in_circle((1.0, 1.0), 0.19).unwrap();
+        assert!((near.0 - 1.14).abs() <= 0.015 && (near.1 - 1.14).abs() <= 0.015, "{near:?}");
+        assert_eq!(g.nearest_occupied_in_circle((1.0, 1.0), 0.15), None);
     }
 
     #[test]
