@@ -1,6 +1,7 @@
 //! The cost of Carto's world model on this machine: one sonar update of the evidence grid (an
-//! echo near, at mid range and at the sonar's limit, and a reading with no echo) and the shape
-//! queries the pilot asks before a move (the corridor of one FORWARD, the turning circle).
+//! echo near, at mid range and at the sonar's limit, and a reading with no echo), the shape
+//! queries the pilot asks before a move (the corridor of one FORWARD, the turning circle), and
+//! one step of the pose filter (a prediction, and a correction from a range against the grid).
 //!
 //! Carto's control cycle is 60 ms and the Raspberry Pi 4 is about 5–8 times slower than a
 //! desktop core, so an update must stay well under a millisecond here.
@@ -11,6 +12,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
 use carto::estimate::grid::{EvidenceGrid, GridParams};
+use carto::estimate::pose::{MotionNoise, PoseFilter, RangeUpdate};
 use carto::estimate::sonar::{Reading, SonarModel};
 use carto::surroundings::Pose2;
 
@@ -55,5 +57,28 @@ fn queries(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, sonar_update, queries);
+fn filter_step(c: &mut Criterion) {
+    let mut grid = seen_room();
+    grid.pin_segment((3.9, 0.0), (3.9, 4.0)); // the east wall, mapped
+    let applied = PoseFilter::new(Pose2 { x: 2.0, y: 2.0, yaw_deg: 0.0 }, 0.02, 1.0)
+        .correct_range(&grid, 0.13, 1.77, 0.005);
+    assert!(
+        matches!(applied, RangeUpdate::Applied { .. }),
+        "the benchmark must measure a correction: {applied:?}"
+    );
+    let noise = MotionNoise::default();
+    let start = PoseFilter::new(Pose2 { x: 2.0, y: 2.0, yaw_deg: 0.0 }, 0.02, 1.0);
+    let mut group = c.benchmark_group("pose_filter");
+    group.bench_function("predict", |b| {
+        let mut f = start.clone();
+        b.iter(|| f.predict(black_box(0.02), 0.0, black_box(0.001), 0.06, &noise))
+    });
+    // the sonar 13 cm ahead of the centre ranges the east wall
+    group.bench_function("correct_range", |b| {
+        b.iter(|| start.clone().correct_range(&grid, 0.13, black_box(1.77), 0.005))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, sonar_update, queries, filter_step);
 criterion_main!(benches);

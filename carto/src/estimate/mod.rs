@@ -4,6 +4,9 @@
 //! - [`grid`]: a bounded log-odds occupancy grid in Carto's metric frame, with shape queries
 //!   (a corridor, a turning circle, a footprint) that answer free, occupied or unknown.
 //! - [`sonar`]: how one sonar reading, echo or silence, changes the grid.
+//! - [`pose`]: an extended Kalman filter over position, heading and gyro bias, predicting from
+//!   the wheels and the gyro and correcting from sonar ranges against the grid.
 
 pub mod grid;
+pub mod pose;
 pub mod sonar;
