@@ -9,9 +9,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use carto::fuzzing::{MAX_INPUT, Op, encode, run};
-use sim::record::{Dir, EndpointLog};
-use sim::runner::Lockstep;
-use sim::scenario::LoadedScenario;
+use twin::record::{Dir, EndpointLog};
+use twin::runner::Lockstep;
+use twin::setup::RunSetup;
 
 const SCENARIOS: [&str; 4] = ["stop-trajectory", "reconnect", "lossy-motor", "goto"];
 /// Simulated time per run (5 ms steps).
@@ -19,7 +19,7 @@ const MAX_STEPS: u64 = 40_000;
 
 fn logs(name: &str) -> Vec<EndpointLog> {
     let path = format!("../scenarios/{name}.ron");
-    let loaded = LoadedScenario::load(std::path::Path::new(&path)).unwrap();
+    let loaded = RunSetup::load(std::path::Path::new(&path)).unwrap();
     let mut run = Lockstep::new(loaded, None).unwrap();
     let mut n = 0;
     while n < MAX_STEPS && run.step() {

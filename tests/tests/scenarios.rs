@@ -7,11 +7,11 @@
 
 use std::path::Path;
 
-use sim::runner::Lockstep;
-use sim::scenario::LoadedScenario;
+use twin::runner::Lockstep;
+use twin::setup::RunSetup;
 
 fn scenario(path: &Path) -> datatest_stable::Result<()> {
-    let loaded = LoadedScenario::load(path)?;
+    let loaded = RunSetup::load(path)?;
     let name = loaded.scenario.name.clone();
     let mut run = Lockstep::new(loaded, None)?;
     run.run_to_end(|_| {});

@@ -6,13 +6,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
-mod processes;
-
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+
+#[path = "e2e/processes/mod.rs"]
+mod processes;
 
 use processes::{Guard, TempDir, binary, free_port, workspace_root};
 use protocol::link::{Command as Cmd, Decoder, Direction, GuiMessage, MsgOrder};

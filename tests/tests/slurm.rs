@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use sim::sweep::output::compare_folders;
+use explobot::sweep::output::compare_folders;
 
 /// The longest the cluster may take to come up, and the job array to finish.
 const LIMIT: Duration = Duration::from_secs(120);
@@ -29,7 +29,7 @@ fn repo() -> PathBuf {
 fn explobot_path() -> PathBuf {
     let exe = std::env::current_exe().unwrap();
     let path = exe.parent().and_then(Path::parent).unwrap().join("explobot");
-    assert!(path.exists(), "{} missing: cargo build --release -p sim --bin explobot", path.display());
+    assert!(path.exists(), "{} missing: cargo build --release -p explobot --bin explobot", path.display());
     path
 }
 

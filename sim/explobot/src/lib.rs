@@ -1,0 +1,10 @@
+#![doc = include_str!("../README.md")]
+
+pub mod args;
+pub mod bench;
+pub mod output;
+pub mod runlog;
+pub mod serve;
+pub mod sink;
+pub mod sweep;
+pub mod wiretool;

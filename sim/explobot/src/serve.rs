@@ -1,0 +1,373 @@
+//! `explobot sim SCENARIO --serve`: the twin in real time, its boards behind real ports.
+//!
+//! The motor board and the sensor board appear as pseudo-terminals (stable symlinks
+//! `run/tty-motor` and `run/tty-sensor`, real paths printed) or as TCP ports, so an unchanged
+//! `carto` binary opens them exactly as it would open `/dev/ttyAMA0` and `/dev/ttyUSB0`. The
+//! physics steps at its fixed `dt`, paced to the wall clock times `speed` ([`twin_app::pacing`], as
+//! the window is).
+//!
+//! A pty ignores baud settings, so the twin enforces each UART's byte budget itself
+//! (`baud / 10` bytes per second, a 64-byte FIFO of credit): a sensor configuration that
+//! exceeds 9600 baud shows up as growing latency, as on the robot.
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use robot_model::time::{Duration, Instant};
+use transport::{Clock, Error, Link, Listener, MockClock, PtyLink, TcpLink, TcpListenerLink, Tracer};
+
+use twin::hardware::{Twin, WriteBudget};
+use twin::runner::Endpoint;
+use twin::setup::RunSetup;
+use twin_app::pacing::Owed;
+use twin_viz::TwinPublisher;
+
+/// Largest burst a UART may send at once, bytes (its FIFO).
+const FIFO: f64 = 64.0;
+/// Most simulated time the twin catches up in one pass, seconds: after a longer stall (a
+/// suspended process, a too-high speed) it drops the backlog instead of racing through it, so it
+/// stays responsive and Ctrl-C works.
+const MAX_CATCH_UP_S: f64 = 0.05;
+
+/// Where the boards are exposed.
+#[derive(Debug, Clone)]
+pub enum Ports {
+    /// Pseudo-terminals with symlinks `DIR/tty-motor` and `DIR/tty-sensor`.
+    Pty {
+        /// Folder for the symlinks (created if missing).
+        dir: PathBuf,
+    },
+    /// TCP listeners, one client each.
+    Tcp {
+        /// Motor board address.
+        motor: SocketAddr,
+        /// Sensor board address.
+        sensor: SocketAddr,
+    },
+}
+
+/// How to serve.
+#[derive(Debug, Clone)]
+pub struct ServeOptions {
+    /// Where the boards are exposed.
+    pub ports: Ports,
+    /// Simulated seconds per wall second (1.0 = real time).
+    pub speed: f64,
+    /// Stop after this much simulated time (`None` = until interrupted).
+    pub duration: Option<Duration>,
+    /// Print a status line this often (simulated time; `None` = never).
+    pub status_every: Option<Duration>,
+}
+
+/// `explobot sim --serve`'s arguments.
+#[derive(clap::Args, Clone, Debug)]
+pub struct ServeArgs {
+    /// Scenario file (RON); the built-in default room when omitted.
+    pub scenario: Option<PathBuf>,
+    /// Serve the boards (required: the twin has no other real-time mode).
+    #[arg(long, required = true)]
+    pub serve: bool,
+    /// Expose the boards as TCP ports BASE (motor) and BASE+1 (sensor) instead of ptys.
+    #[arg(long, value_name = "BASE")]
+    pub tcp: Option<u16>,
+    /// Address the TCP ports bind to.
+    #[arg(long, default_value = "127.0.0.1")]
+    pub bind: String,
+    /// Folder for the pty symlinks.
+    #[arg(long, default_value = "run")]
+    pub run_dir: PathBuf,
+    /// Simulated seconds per wall-clock second.
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+    /// Stop after this many simulated seconds (default: run until Ctrl-C).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Seed (default: the scenario's).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Print the robot's pose this often, simulated seconds (0 = never).
+    #[arg(long, default_value_t = 1.0)]
+    pub status_every: f64,
+    /// Also serve the twin live over the Foxglove WebSocket protocol: true pose, sonar, room and
+    /// the boards' traffic (default address 127.0.0.1:8765).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = twin_viz::DEFAULT_ADDR)]
+    pub foxglove: Option<SocketAddr>,
+}
+
+/// `explobot sim --serve` arguments that do not make a set of serving options.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OptionsError {
+    /// `--speed` is not a positive number.
+    #[error("--speed must be a positive number")]
+    Speed,
+    /// `--tcp BASE` is the last port.
+    #[error("--tcp BASE must leave room for BASE+1")]
+    TcpBase,
+    /// `--bind` with a port is not a socket address.
+    #[error("bad --bind address {bind}: {message}")]
+    Bind {
+        /// The address as given.
+        bind: String,
+        /// Why it does not parse.
+        message: String,
+    },
+}
+
+impl ServeArgs {
+    /// The serving options these arguments ask for, or what is wrong with them.
+    pub fn options(&self) -> Result<ServeOptions, OptionsError> {
+        if !(self.speed.is_finite() && self.speed > 0.0) {
+            return Err(OptionsError::Speed);
+        }
+        let ports = match self.tcp {
+            Some(base) => {
+                let sensor = base.checked_add(1).ok_or(OptionsError::TcpBase)?;
+                let addr = |port: u16| {
+                    format!("{}:{port}", self.bind).parse().map_err(|e: std::net::AddrParseError| {
+                        OptionsError::Bind { bind: self.bind.clone(), message: e.to_string() }
+                    })
+                };
+                Ports::Tcp { motor: addr(base)?, sensor: addr(sensor)? }
+            }
+            None => Ports::Pty { dir: self.run_dir.clone() },
+        };
+        Ok(ServeOptions {
+            ports,
+            speed: self.speed,
+            duration: self.duration.map(Duration::from_secs_f64),
+            status_every: (self.status_every > 0.0).then(|| Duration::from_secs_f64(self.status_every)),
+        })
+    }
+
+    /// What is printed once the ports are open: where the boards are and how to start Carto.
+    pub fn ready_text(&self, scenario_name: &str, motor: &str, sensor: &str) -> String {
+        let transport = if self.tcp.is_some() { "tcp" } else { "sim" };
+        format!(
+            "twin of '{scenario_name}' serving at {}x real time\nmotor board  {motor}\nsensor board {sensor}\nstart Carto with: carto --transport {transport}",
+            self.speed
+        )
+    }
+}
+
+/// A flag that Ctrl-C sets, for [`serve`]'s `stop`.
+pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let on_signal = stop.clone();
+    ctrlc::set_handler(move || on_signal.store(true, Ordering::SeqCst))?;
+    Ok(stop)
+}
+
+/// The status line printed every `status_every`: time, pose, cell and wheel setpoints.
+pub fn status_line(now: Instant, twin: &Twin) -> String {
+    let p = twin.body().pose();
+    let cell = twin.cell().map_or("off grid".to_string(), |(r, c)| format!("({r}, {c})"));
+    format!(
+        "t={:>8.2}s  x={:.3} y={:.3} heading={:6.1}deg  cell {cell}  wheels {:?} rpm",
+        now.as_secs_f64(),
+        p.x,
+        p.y,
+        p.theta.to_degrees(),
+        twin.motor_board().wheel_setpoints_rpm().map(|v| v.round())
+    )
+}
+
+/// One board's port: a pty, or a TCP listener with at most one client.
+pub enum BoardPort {
+    /// A pseudo-terminal master.
+    Pty(PtyLink),
+    /// A TCP listener and its current client.
+    Tcp(TcpListenerLink, Option<TcpLink>),
+}
+
+impl BoardPort {
+    fn describe(&self) -> String {
+        match self {
+            BoardPort::Pty(p) => match p.symlink_path() {
+                Some(link) => format!("{} -> {}", link.display(), p.slave_path().display()),
+                None => p.slave_path().display().to_string(),
+            },
+            BoardPort::Tcp(l, _) => format!("tcp://{}", l.local_addr()),
+        }
+    }
+}
+
+impl Link for BoardPort {
+    type Error = Error;
+
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
+        match self {
+            BoardPort::Pty(p) => match p.read(buf) {
+                // A pty outlives its clients: a departure is news, not an end.
+                Err(e) if e.is_disconnected() => {
+                    tracing::info!("a client closed {}", p.slave_path().display());
+                    Ok(0)
+                }
+                other => other,
+            },
+            BoardPort::Tcp(listener, conn) => {
+                if let Ok(Some((link, peer))) = listener.accept() {
+                    tracing::info!("board client connected from {peer}");
+                    *conn = Some(link);
+                }
+                match conn {
+                    Some(c) => match c.read(buf) {
+                        Err(e) if e.is_disconnected() => {
+                            tracing::info!("board client left");
+                            *conn = None;
+                            Ok(0)
+                        }
+                        other => other,
+                    },
+                    None => Ok(0),
+                }
+            }
+        }
+    }
+
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
+        match self {
+            BoardPort::Pty(p) => p.write(buf),
+            // Nobody attached: the UART sends into an unplugged cable.
+            BoardPort::Tcp(_, None) => Ok(buf.len()),
+            BoardPort::Tcp(_, Some(c)) => match c.write(buf) {
+                Err(e) if e.is_disconnected() => Ok(buf.len()),
+                other => other,
+            },
+        }
+    }
+}
+
+/// Byte credit of one UART.
+struct Pacer {
+    bytes_per_s: f64,
+    credit: f64,
+}
+
+impl Pacer {
+    fn new(baud: u32) -> Self {
+        Pacer { bytes_per_s: robot_model::time::line_bytes_per_sec(baud), credit: FIFO }
+    }
+
+    fn tick(&mut self, dt: Duration) -> usize {
+        self.credit = (self.credit + self.bytes_per_s * dt.as_secs_f64()).min(FIFO);
+        self.credit.floor() as usize
+    }
+
+    fn spend(&mut self, n: usize) {
+        self.credit -= n as f64;
+    }
+}
+
+/// Opens both boards' ports.
+pub fn open_ports(ports: &Ports) -> Result<(BoardPort, BoardPort), Error> {
+    Ok(match ports {
+        Ports::Pty { dir } => {
+            std::fs::create_dir_all(dir)
+                .map_err(|e| Error::from_io(&e, format!("creating {}", dir.display())))?;
+            let motor = PtyLink::open_with_symlink(dir.join("tty-motor"))?;
+            let sensor = PtyLink::open_with_symlink(dir.join("tty-sensor"))?;
+            (BoardPort::Pty(motor), BoardPort::Pty(sensor))
+        }
+        Ports::Tcp { motor, sensor } => (
+            BoardPort::Tcp(TcpListenerLink::bind(motor)?, None),
+            BoardPort::Tcp(TcpListenerLink::bind(sensor)?, None),
+        ),
+    })
+}
+
+/// Runs the twin in real time, paced by `clock`, until `stop` is set or the duration is over.
+/// `ready` is called once with the port descriptions (motor, sensor) when they are open;
+/// `status` every `status_every` of simulated time. With a `publisher`, each step's state and
+/// the bytes through both ports go to it (the ports are traced on the sim clock).
+#[allow(clippy::too_many_arguments)]
+pub fn serve(
+    loaded: &RunSetup,
+    seed: Option<u64>,
+    options: &ServeOptions,
+    clock: &impl Clock,
+    stop: &AtomicBool,
+    publisher: Option<&mut TwinPublisher>,
+    ready: impl FnOnce(&str, &str),
+    status: impl FnMut(Instant, &Twin),
+) -> Result<(), Error> {
+    let (motor, sensor) = open_ports(&options.ports)?;
+    ready(&motor.describe(), &sensor.describe());
+    let Some(publisher) = publisher else {
+        return run_paced(loaded, seed, options, clock, stop, (motor, sensor), status, |_| {}, |_, _| {});
+    };
+    let sim_clock = MockClock::new();
+    let (motor, sensor) = (Tracer::new(motor, sim_clock.clone()), Tracer::new(sensor, sim_clock.clone()));
+    let handles = [("motor", motor.handle()), ("sensor", sensor.handle())];
+    let mut records = Vec::new();
+    let after = |now: Instant, twin: &Twin| {
+        records.clear();
+        for (link, handle) in &handles {
+            let at = Endpoint { link, endpoint: "board", connection: None };
+            records.extend(handle.take().into_iter().map(|r| (at, r)));
+        }
+        publisher.after_step(now, twin, &records);
+    };
+    run_paced(loaded, seed, options, clock, stop, (motor, sensor), status, |now| sim_clock.set(now), after)
+}
+
+/// The paced loop of [`serve`]: `before` and `after` are called around each step.
+#[allow(clippy::too_many_arguments)]
+fn run_paced<M: Link, S: Link>(
+    loaded: &RunSetup,
+    seed: Option<u64>,
+    options: &ServeOptions,
+    clock: &impl Clock,
+    stop: &AtomicBool,
+    (mut motor, mut sensor): (M, S),
+    mut status: impl FnMut(Instant, &Twin),
+    mut before: impl FnMut(Instant),
+    mut after: impl FnMut(Instant, &Twin),
+) -> Result<(), Error> {
+    let seed = seed.unwrap_or(loaded.scenario.seed);
+    let dt = loaded.dt();
+    let dt_s = dt.as_secs_f64();
+    let mut twin = Twin::new(loaded, seed, dt);
+    let mut motor_pacer = Pacer::new(loaded.profile.serial.motor_baud);
+    let mut sensor_pacer = Pacer::new(loaded.profile.serial.sensor_baud);
+    let mut now = Instant::ZERO;
+    let mut next_status = options.status_every.map(|d| Instant::ZERO + d);
+    let speed = options.speed.max(1e-6);
+    let mut owed = Owed::default();
+    let mut last_wall = Instant::ZERO;
+    while !stop.load(Ordering::SeqCst) {
+        let wall = clock.now();
+        let wall_s = wall.total_micros().saturating_sub(last_wall.total_micros()) as f64 / 1e6;
+        last_wall = wall;
+        let behind_s = owed.seconds() + wall_s * speed;
+        if owed.add(wall_s, speed, MAX_CATCH_UP_S) > 0.0 {
+            tracing::warn!(behind_ms = behind_s * 1000.0, "twin fell behind the wall clock; skipping ahead");
+        }
+        let mut done = 0;
+        while done < owed.steps(dt_s) && !stop.load(Ordering::SeqCst) {
+            now += dt;
+            done += 1;
+            before(now);
+            let budget = WriteBudget { motor: motor_pacer.tick(dt), sensor: sensor_pacer.tick(dt) };
+            let io = twin.board_io(now, &mut motor, &mut sensor, budget);
+            motor_pacer.spend(io.motor_sent);
+            sensor_pacer.spend(io.sensor_sent);
+            twin.physics_step(now);
+            after(now, &twin);
+            if let Some(at) = next_status
+                && now >= at
+            {
+                status(now, &twin);
+                next_status = options.status_every.map(|d| at + d);
+            }
+        }
+        owed.ran(done, dt_s);
+        if options.duration.is_some_and(|d| now >= Instant::ZERO + d) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    Ok(())
+}

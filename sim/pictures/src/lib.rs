@@ -1,0 +1,5 @@
+#![doc = include_str!("../README.md")]
+
+pub mod mapimg;
+pub mod picture;
+pub mod truthimg;

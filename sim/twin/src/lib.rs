@@ -1,0 +1,23 @@
+#![doc = include_str!("../README.md")]
+
+pub mod belief;
+pub mod body;
+pub mod counts;
+pub mod drive;
+pub mod freespace;
+pub mod grid;
+pub mod hardware;
+pub mod localisation;
+pub mod mission;
+pub mod oracle;
+pub mod raster;
+pub mod record;
+pub mod replay;
+pub mod report;
+pub mod runner;
+pub mod scenario;
+pub mod scored;
+pub mod setup;
+pub mod touches;
+pub mod truth;
+pub mod world;
