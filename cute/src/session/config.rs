@@ -3,8 +3,9 @@
 //!
 //! Concept: [`Compat`] is the one place that knows how the original 2024 Carto differs — the
 //! `Msg` byte order ([`Compat::msg_order`]) and the largest trajectory batch
-//! ([`Compat::max_batch`]). Its names (`default`, alias `none`, and `explobot-2024`) come from one
-//! table, the [`clap::ValueEnum`] derive, which also serves [`FromStr`].
+//! ([`Compat::max_batch`]). Its names (`default`, alias `none`, and `explobot-2024`) are
+//! [`Compat::NAMES`], which [`FromStr`] reads; with the feature `cli` clap's `ValueEnum` derive
+//! gives the command line the same names (a test checks that they agree).
 //!
 //! [`CuteConfig::map`] is a known map to start from (`--map FILE`, [`crate::map_file`]);
 //! [`CuteConfig::with_map`] takes its size and robot cell.
@@ -30,7 +31,6 @@
 
 use std::str::FromStr;
 
-use clap::ValueEnum;
 use protocol::link::{self, MsgOrder};
 use robot_model::grid::Heading;
 use robot_model::time::Duration;
@@ -46,19 +46,24 @@ pub const MAX_BATCH: usize = 255;
 pub const MAX_BATCH_COMPAT: usize = 50;
 
 /// Which Carto the session talks to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum Compat {
     /// Our Carto: big-endian `Msg`, the full protocol.
     #[default]
-    #[value(name = "default", alias = "none")]
+    #[cfg_attr(feature = "cli", value(name = "default", alias = "none"))]
     Default,
     /// The original 2024 Carto: little-endian `Msg`, trajectories only, batches ≤ 50, clicks
     /// planned through unknown cells, the batch after a STOP dropped.
-    #[value(name = "explobot-2024")]
+    #[cfg_attr(feature = "cli", value(name = "explobot-2024"))]
     Explobot2024,
 }
 
 impl Compat {
+    /// Every name a compat mode is given by, with its mode (the first for each is its own).
+    pub const NAMES: [(&'static str, Compat); 3] =
+        [("default", Compat::Default), ("none", Compat::Default), ("explobot-2024", Compat::Explobot2024)];
+
     /// The byte order of the `Msg` field this Carto speaks.
     pub fn msg_order(self) -> MsgOrder {
         match self {
@@ -84,10 +89,13 @@ impl Compat {
 
 impl FromStr for Compat {
     type Err = CuteError;
-    /// Parses the names clap accepts (case-sensitive): `default`, `none`, `explobot-2024`.
+    /// Parses [`Compat::NAMES`] (case-sensitive): `default`, `none`, `explobot-2024`.
     fn from_str(s: &str) -> Result<Compat, CuteError> {
-        <Compat as ValueEnum>::from_str(s, false)
-            .map_err(|_| CuteError::UnknownCompat { name: s.to_string() })
+        Compat::NAMES
+            .iter()
+            .find(|(name, _)| *name == s)
+            .map(|&(_, compat)| compat)
+            .ok_or_else(|| CuteError::UnknownCompat { name: s.to_string() })
     }
 }
 
@@ -217,11 +225,27 @@ mod tests {
     #![allow(clippy::unwrap_used)]
     use super::*;
 
+    #[cfg(feature = "cli")]
+    #[test]
+    fn the_command_line_and_from_str_know_the_same_compat_names() {
+        use clap::ValueEnum;
+        for (name, compat) in Compat::NAMES {
+            assert_eq!(<Compat as ValueEnum>::from_str(name, false), Ok(compat), "{name}");
+            assert_eq!(name.parse::<Compat>().ok(), Some(compat), "{name}");
+        }
+        for compat in Compat::value_variants() {
+            let names = compat.to_possible_value().unwrap();
+            for name in names.get_name_and_aliases() {
+                assert_eq!(name.parse::<Compat>().ok(), Some(*compat), "{name}");
+            }
+        }
+    }
+
     #[test]
     fn every_compat_has_one_name_that_parses_back() {
-        for c in Compat::value_variants() {
-            let name = c.to_possible_value().unwrap();
-            assert_eq!(name.get_name().parse::<Compat>(), Ok(*c));
+        for c in [Compat::Default, Compat::Explobot2024] {
+            let (name, _) = Compat::NAMES.iter().find(|(_, m)| *m == c).unwrap();
+            assert_eq!(name.parse::<Compat>(), Ok(c));
         }
         assert_eq!(
             "Explobot-2024".parse::<Compat>(),
@@ -246,7 +270,7 @@ mod tests {
 
     #[test]
     fn batches_always_fit_the_one_byte_count() {
-        for c in Compat::value_variants() {
+        for (_, c) in Compat::NAMES {
             assert!(c.max_batch() <= MAX_BATCH && MAX_BATCH <= usize::from(u8::MAX));
         }
     }

@@ -17,6 +17,7 @@ mod generate;
 mod generated_runs;
 mod grid_coverage;
 mod imports;
+mod layers;
 mod long_mission;
 mod measured_rooms;
 mod processes;
