@@ -1,5 +1,5 @@
-//! Carto's estimate of the world: the evidence grid and the sonar's sensor model that feeds it
-//! (style rule 16).
+//! Carto's estimate of the world and of itself: the evidence grid, the sonar's sensor model
+//! that feeds it (style rule 16), and the pose filter (style rule 17).
 //!
 //! - [`grid`]: a bounded log-odds occupancy grid in Carto's metric frame, with shape queries
 //!   (a corridor, a turning circle, a footprint) that answer free, occupied or unknown.

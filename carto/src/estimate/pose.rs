@@ -49,6 +49,9 @@ pub const GATE_SIGMAS: f64 = 3.0;
 /// whose expected range is still well defined.
 pub const MAX_INCIDENCE_DEG: f64 = 60.0;
 
+/// The standard deviation of the gyro bias before anything is learnt of it, degrees per second.
+pub const INITIAL_BIAS_SIGMA_DEG_PER_S: f64 = 0.05;
+
 /// How much each motion component adds to the uncertainty.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MotionNoise {
@@ -105,14 +108,14 @@ pub struct PoseFilter {
 
 impl PoseFilter {
     /// A filter at `pose`, with position and heading standard deviations `sigma_xy_m` and
-    /// `sigma_deg`, and no known bias.
+    /// `sigma_deg`, and a bias of 0 known to [`INITIAL_BIAS_SIGMA_DEG_PER_S`].
     pub fn new(pose: Pose2, sigma_xy_m: f64, sigma_deg: f64) -> Self {
         let state = Vector4::new(pose.x, pose.y, pose.yaw_deg.to_radians(), 0.0);
         let cov = Matrix4::from_diagonal(&Vector4::new(
             sigma_xy_m.powi(2),
             sigma_xy_m.powi(2),
             sigma_deg.to_radians().powi(2),
-            0.05f64.to_radians().powi(2),
+            INITIAL_BIAS_SIGMA_DEG_PER_S.to_radians().powi(2),
         ));
         PoseFilter { state, cov }
     }
