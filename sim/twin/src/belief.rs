@@ -162,6 +162,18 @@ mod tests {
     use carto::odometry::CellOffset;
     use robot_model::grid::{GridPose, Heading};
 
+    /// A 2 × 2 grid of 0.45 m cells, and Carto believing the robot at cell (0, 0)'s centre
+    /// facing east.
+    fn at_origin_facing_east() -> (GridFrame, Belief) {
+        let frame = GridFrame::for_bounds((0.0, 0.0), (0.9, 0.9), 0.45);
+        let belief = Belief {
+            pose: GridPose { x: 0, y: 0, heading: Heading::East },
+            offset: CellOffset::default(),
+            off_heading_deg: 0.0,
+        };
+        (frame, belief)
+    }
+
     #[test]
     fn percentile_by_nearest_rank() {
         let v: Vec<f64> = (1..=100).map(f64::from).collect();
@@ -190,13 +202,8 @@ mod tests {
 
     #[test]
     fn a_contact_is_judged_at_the_third_move_done_after_it() {
-        let frame = GridFrame::for_bounds((0.0, 0.0), (0.9, 0.9), 0.45);
+        let (frame, belief) = at_origin_facing_east();
         let (cx, cy) = frame.cell_center(0, 0);
-        let belief = Belief {
-            pose: GridPose { x: 0, y: 0, heading: Heading::East },
-            offset: CellOffset::default(),
-            off_heading_deg: 0.0,
-        };
         let mut t = BeliefTracker::default();
         t.contact();
         // errors at the MOVE_DONEs after it: 8, 5, then 4 cm; samples between them do not count
@@ -215,13 +222,8 @@ mod tests {
 
     #[test]
     fn the_largest_error_is_kept_with_its_time_and_the_p95_over_all_samples() {
-        let frame = GridFrame::for_bounds((0.0, 0.0), (0.9, 0.9), 0.45);
+        let (frame, belief) = at_origin_facing_east();
         let (cx, cy) = frame.cell_center(0, 0);
-        let belief = Belief {
-            pose: GridPose { x: 0, y: 0, heading: Heading::East },
-            offset: CellOffset::default(),
-            off_heading_deg: 0.0,
-        };
         let mut t = BeliefTracker::default();
         for i in 0..20 {
             let off = if i == 7 { 0.10 } else { 0.01 };
