@@ -10,8 +10,9 @@
 //!   stop at.
 //!
 //! - **after a contact** (issue 42: "after any contact the belief error is back under 3 cm within
-//!   three moves"): for every contact that starts, the belief error at the third `MOVE_DONE`
-//!   after it; the report counts those contacts and those still over [`RECOVERED_WITHIN_M`].
+//!   three moves"): for every physics step in which a contact starts (contacts that start in
+//!   the same step count once), the belief error at the third `MOVE_DONE` after it; the report
+//!   counts those contacts and those still over [`RECOVERED_WITHIN_M`].
 //!
 //! Samples are taken at every `MOVE_DONE` Cute receives, at every refusal Carto makes (a cell
 //! reported blocked, a turn refused), once every simulated second, and at the end, whenever
@@ -44,7 +45,7 @@ use robot_model::grid::GridFrame;
 use robot_model::pose::Pose2;
 use serde::{Deserialize, Serialize};
 
-use crate::localisation::{angle_between, carto_belief};
+use crate::localisation::{angle_between, carto_belief, keep_largest};
 
 /// A contact's belief error counts as recovered at or under this, metres.
 pub const RECOVERED_WITHIN_M: f64 = 0.03;
@@ -105,14 +106,8 @@ impl BeliefTracker {
         let r = &mut self.report;
         r.samples += 1;
         self.errors_m.push(error);
-        if error > r.error_max_m {
-            r.error_max_m = error;
-            r.error_max_at_s = t_s;
-        }
-        if heading_error > r.heading_error_max_deg {
-            r.heading_error_max_deg = heading_error;
-            r.heading_error_max_at_s = t_s;
-        }
+        keep_largest(error, t_s, &mut r.error_max_m, &mut r.error_max_at_s);
+        keep_largest(heading_error, t_s, &mut r.heading_error_max_deg, &mut r.heading_error_max_at_s);
         if move_done {
             for moves in &mut self.contacts_pending {
                 *moves = moves.saturating_sub(1);
@@ -125,15 +120,13 @@ impl BeliefTracker {
             self.contacts_pending.retain(|&m| m > 0);
             let (cx, cy) = frame.cell_center(usize::from(belief.pose.x), usize::from(belief.pose.y));
             let offset = f64::from((body.x - cx).hypot(body.y - cy));
-            if offset > r.stop_offset_max_m {
-                r.stop_offset_max_m = offset;
-                r.stop_offset_max_at_s = t_s;
-            }
+            keep_largest(offset, t_s, &mut r.stop_offset_max_m, &mut r.stop_offset_max_at_s);
         }
         tracing::trace!(t_s, error, heading_error, "Carto's belief against the truth");
     }
 
-    /// A contact started: its recovery is judged at the [`RECOVERY_MOVES`]th `MOVE_DONE` sampled
+    /// A contact started (one call for all the contacts that start in one physics step): its
+    /// recovery is judged at the [`RECOVERY_MOVES`]th `MOVE_DONE` sampled
     /// after it.
     pub fn contact(&mut self) {
         self.contacts_pending.push(RECOVERY_MOVES);

@@ -79,14 +79,16 @@ impl Localisation {
             heading_error,
             "belief against truth"
         );
-        if position > self.position_error_max_m {
-            self.position_error_max_m = position;
-            self.position_error_at_s = t_s;
-        }
-        if heading_error > self.heading_error_max_deg {
-            self.heading_error_max_deg = heading_error;
-            self.heading_error_at_s = t_s;
-        }
+        keep_largest(position, t_s, &mut self.position_error_max_m, &mut self.position_error_at_s);
+        keep_largest(heading_error, t_s, &mut self.heading_error_max_deg, &mut self.heading_error_at_s);
+    }
+}
+
+/// Keeps `value`, seen at sim time `t_s`, in `max` and its time in `at` when it is larger.
+pub(crate) fn keep_largest(value: f64, t_s: f64, max: &mut f64, at: &mut f64) {
+    if value > *max {
+        *max = value;
+        *at = t_s;
     }
 }
 
