@@ -9,6 +9,10 @@
 //!   true body centre to the centre of the cell Carto stores, the point today's Carto means to
 //!   stop at.
 //!
+//! - **after a contact** (issue 42: "after any contact the belief error is back under 3 cm within
+//!   three moves"): for every contact that starts, the belief error at the third `MOVE_DONE`
+//!   after it; the report counts those contacts and those still over [`RECOVERED_WITHIN_M`].
+//!
 //! Samples are taken at every `MOVE_DONE` Cute receives, at every refusal Carto makes (a cell
 //! reported blocked, a turn refused), once every simulated second, and at the end, whenever
 //! Carto holds a pose. The report keeps the largest of each with its time, and the 95th
@@ -42,6 +46,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::localisation::{angle_between, carto_belief};
 
+/// A contact's belief error counts as recovered at or under this, metres.
+pub const RECOVERED_WITHIN_M: f64 = 0.03;
+/// The `MOVE_DONE` after a contact at which its recovery is judged.
+pub const RECOVERY_MOVES: u8 = 3;
+
 /// The figures of a run's belief samples (see the module docs).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct BeliefReport {
@@ -62,12 +71,24 @@ pub struct BeliefReport {
     pub stop_offset_max_m: f64,
     /// Sim time of that largest stop offset, seconds.
     pub stop_offset_max_at_s: f64,
+    /// Contacts followed by [`RECOVERY_MOVES`] `MOVE_DONE`s (0 in results written before it was
+    /// recorded).
+    #[serde(default)]
+    pub after_contact: u64,
+    /// Of those, how many left the belief error over [`RECOVERED_WITHIN_M`] at that `MOVE_DONE`.
+    #[serde(default)]
+    pub after_contact_unrecovered: u64,
+    /// The largest belief error at that `MOVE_DONE`, metres.
+    #[serde(default)]
+    pub after_contact_max_m: f64,
 }
 
 /// Collects the samples of a run.
 #[derive(Debug, Clone, Default)]
 pub struct BeliefTracker {
     errors_m: Vec<f64>,
+    /// `MOVE_DONE`s still to come before each pending contact is judged.
+    contacts_pending: Vec<u8>,
     report: BeliefReport,
 }
 
@@ -93,6 +114,15 @@ impl BeliefTracker {
             r.heading_error_max_at_s = t_s;
         }
         if move_done {
+            for moves in &mut self.contacts_pending {
+                *moves = moves.saturating_sub(1);
+                if *moves == 0 {
+                    r.after_contact += 1;
+                    r.after_contact_unrecovered += u64::from(error > RECOVERED_WITHIN_M);
+                    r.after_contact_max_m = r.after_contact_max_m.max(error);
+                }
+            }
+            self.contacts_pending.retain(|&m| m > 0);
             let (cx, cy) = frame.cell_center(usize::from(belief.pose.x), usize::from(belief.pose.y));
             let offset = f64::from((body.x - cx).hypot(body.y - cy));
             if offset > r.stop_offset_max_m {
@@ -101,6 +131,12 @@ impl BeliefTracker {
             }
         }
         tracing::trace!(t_s, error, heading_error, "Carto's belief against the truth");
+    }
+
+    /// A contact started: its recovery is judged at the [`RECOVERY_MOVES`]th `MOVE_DONE` sampled
+    /// after it.
+    pub fn contact(&mut self) {
+        self.contacts_pending.push(RECOVERY_MOVES);
     }
 
     /// The figures so far.
@@ -150,6 +186,31 @@ mod tests {
         let r = t.report();
         assert!((r.heading_error_max_deg - 1.0).abs() < 1e-3, "{r:?}");
         assert_eq!(r.stop_offset_max_m, 0.0, "no MOVE_DONE, no stop offset");
+    }
+
+    #[test]
+    fn a_contact_is_judged_at_the_third_move_done_after_it() {
+        let frame = GridFrame::for_bounds((0.0, 0.0), (0.9, 0.9), 0.45);
+        let (cx, cy) = frame.cell_center(0, 0);
+        let belief = Belief {
+            pose: GridPose { x: 0, y: 0, heading: Heading::East },
+            offset: CellOffset::default(),
+            off_heading_deg: 0.0,
+        };
+        let mut t = BeliefTracker::default();
+        t.contact();
+        // errors at the MOVE_DONEs after it: 8, 5, then 4 cm; samples between them do not count
+        for (i, (off, done)) in
+            [(0.08, true), (0.01, false), (0.05, true), (0.04, true), (0.09, true)].iter().enumerate()
+        {
+            if i == 3 {
+                t.contact(); // a second contact, judged two MOVE_DONEs later: never
+            }
+            t.sample(i as f64, &frame, belief, Pose2::new(cx + off, cy, 0.0), *done);
+        }
+        let r = t.report();
+        assert_eq!((r.after_contact, r.after_contact_unrecovered), (1, 1), "{r:?}");
+        assert!((r.after_contact_max_m - 0.04).abs() < 1e-6, "{r:?}");
     }
 
     #[test]

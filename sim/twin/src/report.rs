@@ -373,6 +373,16 @@ impl Report {
             b.heading_error_max_at_s,
             b.stop_offset_max_m
         );
+        if b.after_contact > 0 {
+            let _ = writeln!(
+                s,
+                "after contacts  belief at the third MOVE_DONE after each of {} contacts: {} over {:.0} cm, largest {:.3} m",
+                b.after_contact,
+                b.after_contact_unrecovered,
+                100.0 * crate::belief::RECOVERED_WITHIN_M,
+                b.after_contact_max_m
+            );
+        }
         let _ = writeln!(
             s,
             "Cute's cell     at the end of {} moves: its centre up to {:.3} m from the robot (at {:.1} s), heading up to {:.1} deg off (at {:.1} s)",

@@ -326,6 +326,7 @@ impl Lockstep {
         self.twin.physics_step(now);
         if self.twin.body().world().collisions() != collisions {
             self.note_contact(now);
+            self.belief.contact();
         }
         if self.twin.trail().len() != trail_points {
             if let Some(point) = self

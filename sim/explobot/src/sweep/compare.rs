@@ -111,7 +111,10 @@ pub fn compare(old: &[RunRecord], new: &[RunRecord], old_name: &Path, new_name: 
     // A figure a sweep's results do not carry (an older binary's) is shown as "-".
     let touch = |f: &Figures, v: f64| (f.with_touches > 0).then_some(v);
     let belief = |f: &Figures, v: f64| (f.with_belief > 0).then_some(v);
-    let rows: [(&str, Option<f64>, Option<f64>, usize); 7] = [
+    let unrecovered = |f: &Figures| {
+        (f.after_contact > 0).then(|| 100.0 * f.after_contact_unrecovered as f64 / f.after_contact as f64)
+    };
+    let rows: [(&str, Option<f64>, Option<f64>, usize); 8] = [
         (
             "touches per 100 moves",
             touch(&fo, fo.touches_per_100_moves),
@@ -143,6 +146,7 @@ pub fn compare(old: &[RunRecord], new: &[RunRecord], old_name: &Path, new_name: 
             3,
         ),
         ("belief error, largest (m)", belief(&fo, fo.belief_max_m), belief(&fnew, fnew.belief_max_m), 3),
+        ("contacts with belief > 3 cm three moves on (%)", unrecovered(&fo), unrecovered(&fnew), 1),
         ("mean coverage (%)", Some(100.0 * fo.mean_coverage), Some(100.0 * fnew.mean_coverage), 1),
     ];
     let show = |v: Option<f64>, digits: usize| v.map_or("-".to_string(), |v| format!("{v:.digits$}"));

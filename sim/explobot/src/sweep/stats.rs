@@ -92,6 +92,10 @@ pub struct Figures {
     pub belief_p95_median_m: f64,
     /// Largest belief error of any run, metres.
     pub belief_max_m: f64,
+    /// Contacts judged three `MOVE_DONE`s after (`twin::belief`), all runs together.
+    pub after_contact: u64,
+    /// Of those, how many left the belief error over 3 cm.
+    pub after_contact_unrecovered: u64,
     /// Mean coverage of the scored set.
     pub mean_coverage: f64,
     /// Runs whose results carry touch figures (results of older binaries do not).
@@ -125,6 +129,8 @@ impl Figures {
                 f.with_belief += 1;
                 p95s.push(b.error_p95_m);
                 f.belief_max_m = f.belief_max_m.max(b.error_max_m);
+                f.after_contact += b.after_contact;
+                f.after_contact_unrecovered += b.after_contact_unrecovered;
             }
             if let Some(c) = r.coverage {
                 coverage = (coverage.0 + c, coverage.1 + 1);
