@@ -82,8 +82,8 @@ pub struct CartoStats {
     pub turns_refused: u64,
     /// Turns that failed (any move error) whose turn back to their start heading was started.
     pub turns_undone: u64,
-    /// Along-track fixes against a wall seen before.
-    pub wall_fixes: u64,
+    /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
+    pub pose_fixes: u64,
     /// Sonar readings kept while a turn ran (near its end, close echoes only).
     pub turn_readings: u64,
     /// Sonar readings kept while a FORWARD drove.
@@ -588,7 +588,7 @@ impl Carto {
             pushes: p.pushes,
             heading_jumps: self.sensors.imu_drift_jumps(),
             push_jumps: self.sensors.drift_counts().pushes,
-            wall_fixes: p.wall_fixes,
+            pose_fixes: p.pose_fixes,
             ..self.stats
         }
     }

@@ -359,6 +359,11 @@ impl Motor {
         self.odo.correct_along(metres);
     }
 
+    /// Corrects the odometry's offset by `fix` in the nominal frame (see [`Odometry::correct`]).
+    pub fn correct_offset(&mut self, fix: CellOffset) {
+        self.odo.correct(fix);
+    }
+
     /// The robot is at the centre of its cell: Cute sent a fresh pose (`SEND_ROBOT_POSITION`).
     pub fn reset_odometry(&mut self) {
         self.odo.reset();

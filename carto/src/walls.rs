@@ -115,6 +115,32 @@ impl Walls {
     }
 }
 
+/// The cell index across `pose`'s heading: the row facing east or west, the column facing north
+/// or south (the `lateral` of a [`Wall`]).
+pub fn lateral(pose: GridPose) -> i32 {
+    cells(pose).1
+}
+
+impl Walls {
+    /// The kept wall facing `heading` from the row or column `lateral` whose depth is nearest
+    /// `depth_m`: how much deeper it lies, metres. `None` without one.
+    pub fn nearest_gap(&self, heading: Heading, lateral: i32, depth_m: f64) -> Option<f64> {
+        self.walls
+            .iter()
+            .filter(|w| w.heading == heading && w.lateral == lateral)
+            .map(|w| w.depth_m - depth_m)
+            .min_by(|a, b| a.abs().total_cmp(&b.abs()))
+    }
+
+    /// Keeps a surface at `depth_m` facing `heading` from `lateral` (see [`Walls::remember`]).
+    pub fn remember_depth(&mut self, heading: Heading, lateral: i32, depth_m: f64) {
+        if self.walls.len() >= CAPACITY {
+            self.walls.remove(0);
+        }
+        self.walls.push(Wall { heading, lateral, depth_m });
+    }
+}
+
 /// Where a reading puts its surface: the row or column across the heading, and the depth along
 /// it (see the module docs).
 fn place(pose: GridPose, cell_m: f64, along_m: f64, ahead_m: f64) -> (i32, f64) {

@@ -138,72 +138,42 @@ fn the_scan_drives_when_the_path_is_clear() {
     assert!((h.distance_from(0.0, 0.0) - 0.30).abs() <= 0.015);
 }
 
-/// Two FORWARDs east, the range ahead 100 cm before the first and `cm_after` before the second;
-/// where the first ended and how far the second drove.
-fn two_forwards_with_ranges(cm_after: f32) -> (f64, f64) {
+/// FORWARDs east with the range ahead before each read off a wall `wall_m` east of the start
+/// (the sonar sits 13 cm ahead of the centre), plus `error_cm[i]` before FORWARD `i`; how far
+/// each FORWARD drove, and how many readings corrected the belief.
+fn forwards_towards_a_wall(wall_m: f64, error_cm: &[f32]) -> (Vec<f64>, u64) {
     let mut h = ready_with(fake::test_config());
-    h.robot.distance_cm = 100.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
-    let x1 = h.robot.x;
-    h.robot.distance_cm = cm_after;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 2));
-    (x1, h.robot.x - x1)
-}
-
-#[test]
-fn the_range_ahead_corrects_the_position_along_the_track() {
-    // the wheels say one cell (30 cm); the wall ahead came 34 cm closer: the robot went 4 cm
-    // further than it believes (slip). Gain σw²/(σw² + 2σs²) with σw = 3 mm (1 %/m over 0.30 m)
-    // and σs = 3 mm: 1/3 of it comes off the next FORWARD
-    let (x1, second) = two_forwards_with_ranges(66.0);
-    let gain = 0.003f64.powi(2) / (0.003f64.powi(2) + 2.0 * 0.003f64.powi(2));
-    let expected = 0.30 - (x1 - 0.30) - gain * (0.34 - x1);
-    assert!((second - expected).abs() <= 0.01, "second FORWARD drove {second:.4} m, expected {expected:.4}");
-    assert!(second < 0.295 - (x1 - 0.30), "no correction: drove {second:.4} m");
-}
-
-#[test]
-fn a_range_that_disagrees_too_much_is_another_object_and_is_ignored() {
-    // 50 cm closer after a 30 cm move: not the same wall
-    let (x1, second) = two_forwards_with_ranges(50.0);
-    assert!((second - (0.30 - (x1 - 0.30))).abs() <= 0.01, "drove {second:.4} m");
-}
-
-/// Three FORWARDs east with the range ahead before each (`None`: no echo); how far the third
-/// drove and how many wall fixes Carto made.
-fn three_forwards(cfg: CartoConfig, ranges: [Option<f32>; 3]) -> (f64, u64) {
-    let mut h = ready_with(cfg);
-    let mut start = 0.0;
-    for (i, cm) in ranges.into_iter().enumerate() {
-        h.robot.distance_cm = cm.unwrap_or(-1.0);
+    let mut driven = Vec::new();
+    for (i, e) in error_cm.iter().enumerate() {
+        h.robot.distance_cm = ((wall_m - h.robot.x - 0.13) * 100.0) as f32 + e;
         h.run_ms(150);
-        start = h.robot.x;
+        let start = h.robot.x;
         h.send(cartography(Command::Forward));
         assert!(h.run_until(8000, |h| h.move_done_count() == i + 1), "FORWARD {i}");
+        driven.push(h.robot.x - start);
     }
-    (h.robot.x - start, h.carto.stats().wall_fixes)
+    (driven, h.carto.stats().pose_fixes)
 }
 
 #[test]
-fn a_wall_seen_before_fixes_the_position_after_a_reading_without_echo() {
-    // The wall reads 95 cm from the start cell; no echo from the next cell (the relative fix
-    // has no pair); from the third cell it reads 32.5 cm where 35 were due: the robot is 2.5 cm
-    // further along than it believes, and only the wall seen two cells back can tell.
-    let ranges = [Some(95.0), None, Some(32.5)];
-    let (with_fix, fixes) = three_forwards(fake::test_config(), ranges);
-    let off = CartoConfig { wall_fix: false, ..fake::test_config() };
-    let (without, none) = three_forwards(off, ranges);
-    assert_eq!((fixes, none), (1, 0));
-    // gain σw²/(σw² + 2σs²) = 1/3 at 0.30 m cells: the third FORWARD drives 0.8 cm less
-    let gain = 1.0 / 3.0;
-    assert!(
-        (without - with_fix - gain * 0.025).abs() <= 0.003,
-        "third FORWARD: {with_fix:.4} m with the wall fix, {without:.4} m without"
-    );
+fn the_range_ahead_corrects_the_belief_against_the_wall_heard_before() {
+    // the wall is heard from the first three cells; before the fourth FORWARD it reads 1 cm
+    // short: the robot is further along than it believes, and that FORWARD drives less (the
+    // filter weighs the wheels, 1 % of the distance, against two readings in whole centimetres)
+    let (agree, fixes_agree) = forwards_towards_a_wall(1.60, &[0.0; 4]);
+    let (short, fixes) = forwards_towards_a_wall(1.60, &[0.0, 0.0, 0.0, -1.0]);
+    let less = agree[3] - short[3];
+    assert!((0.001..=0.01).contains(&less), "the fourth FORWARD drove {less:.4} m less: {agree:?} {short:?}");
+    assert_eq!((fixes_agree, fixes), (3, 3), "every reading after the first corrects");
+    assert!((agree[0] - short[0]).abs() < 1e-9 && (agree[2] - short[2]).abs() < 1e-9);
+}
+
+#[test]
+fn a_range_far_from_the_mapped_wall_is_another_object_and_is_ignored() {
+    // 12 cm short: a chair, not the wall; the belief stays where the wheels put it
+    let (agree, _) = forwards_towards_a_wall(1.60, &[0.0; 4]);
+    let (chair, _) = forwards_towards_a_wall(1.60, &[0.0, 0.0, 0.0, -12.0]);
+    assert!((agree[3] - chair[3]).abs() <= 0.003, "{agree:?} {chair:?}");
 }
 
 /// Sends the turn `turn` from EAST (`Right` to SOUTH, `Left` to NORTH) with the sonar reading

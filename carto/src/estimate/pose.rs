@@ -39,7 +39,7 @@
 
 use nalgebra::{Matrix4, RowVector4, Vector4};
 
-use super::grid::{EvidenceGrid, Occupancy};
+use super::grid::EvidenceGrid;
 use crate::surroundings::Pose2;
 
 /// A range further from the expected one than this many standard deviations is rejected.
@@ -48,6 +48,16 @@ pub const GATE_SIGMAS: f64 = 3.0;
 /// loses echoes past about 22.5° (the default profile's incidence limit); 60° keeps the ones
 /// whose expected range is still well defined.
 pub const MAX_INCIDENCE_DEG: f64 = 60.0;
+
+/// A cell at or above this evidence is a surface the filter expects echoes from, log-odds
+/// (p 0.62): two readings that agree on it. Lower than the grid's "occupied" (which the safety
+/// checks act on): a range compared with a surface that is not there is gated out, while a
+/// surface heard from afar takes several readings to reach "occupied".
+pub const SURFACE_LOG_ODDS: f64 = 0.85;
+
+/// A run of occupied cells along a ray deeper than this is taken as this deep (a thick piece
+/// of furniture): the surface is at the middle of at most this much, metres.
+pub const MAX_SURFACE_DEPTH_M: f64 = 0.06;
 
 /// The standard deviation of the gyro bias before anything is learnt of it, degrees per second.
 pub const INITIAL_BIAS_SIGMA_DEG_PER_S: f64 = 0.05;
@@ -211,7 +221,8 @@ impl PoseFilter {
     }
 
     /// Corrects the estimate from the sonar's range `range_m` (σ `sigma_m`), the sonar mounted
-    /// `mount_m` ahead of the body's centre on its axis, against `grid` (see the module docs).
+    /// `mount_m` ahead of the body's centre on its axis, against `grid`, looking along the axis
+    /// only (see the module docs).
     pub fn correct_range(
         &mut self,
         grid: &EvidenceGrid,
@@ -219,28 +230,67 @@ impl PoseFilter {
         range_m: f64,
         sigma_m: f64,
     ) -> RangeUpdate {
+        let axis = Fan { ray_offsets_deg: &[0.0], incidence_limit_deg: MAX_INCIDENCE_DEG };
+        self.correct_echo(grid, mount_m, &axis, range_m, sigma_m)
+    }
+
+    /// Corrects the estimate from an echo at `range_m` (σ `sigma_m`) of a sonar mounted `mount_m`
+    /// ahead of the body's centre, whose cone `fan` samples: the expected range is the nearest
+    /// surface any ray of the fan meets within the incidence limit, as the sonar hears the
+    /// nearest audible echo in its cone; the derivatives are those of that ray.
+    pub fn correct_echo(
+        &mut self,
+        grid: &EvidenceGrid,
+        mount_m: f64,
+        fan: &Fan,
+        range_m: f64,
+        sigma_m: f64,
+    ) -> RangeUpdate {
         let theta = self.state[2];
-        let u = (theta.cos(), theta.sin());
-        let sensor = (self.state[0] + mount_m * u.0, self.state[1] + mount_m * u.1);
+        let axis = (theta.cos(), theta.sin());
+        let sensor = (self.state[0] + mount_m * axis.0, self.state[1] + mount_m * axis.1);
         let max_m = range_m + GATE_SIGMAS * (sigma_m + self.sigma_along(theta.to_degrees())) + 0.1;
-        let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else {
+        let cos_limit = fan.incidence_limit_deg.min(MAX_INCIDENCE_DEG).to_radians().cos();
+        let mut nearest: Option<(f64, (f64, f64), (f64, f64), f64)> = None;
+        for offset in fan.ray_offsets_deg {
+            let ray = theta + offset.to_radians();
+            let u = (ray.cos(), ray.sin());
+            let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else { continue };
+            if nearest.is_some_and(|(d, ..)| d <= expected) {
+                continue;
+            }
+            let normal = surface_normal(grid, hit, u);
+            let facing = -(normal.0 * u.0 + normal.1 * u.1); // cos of the incidence
+            if facing >= cos_limit {
+                nearest = Some((expected, u, normal, facing));
+            }
+        }
+        let Some((expected, u, normal, facing)) = nearest else {
             return RangeUpdate::NoSurface;
         };
-        let normal = surface_normal(grid, hit, u);
-        let facing = -(normal.0 * u.0 + normal.1 * u.1); // cos of the incidence
-        if facing < MAX_INCIDENCE_DEG.to_radians().cos() {
-            return RangeUpdate::NoSurface;
-        }
-        // r = n·(p0 − s)/(n·u) with s = (x, y) + m·u: the derivatives for a plane through the hit
-        let perp = (-u.1, u.0);
-        let n_perp = normal.0 * perp.0 + normal.1 * perp.1;
+        // r = n·(p0 − s)/(n·u) with s = (x, y) + m·axis: the derivatives for a plane through the
+        // hit; turning the body turns both the mount and the ray
+        let n_perp = |v: (f64, f64)| normal.0 * -v.1 + normal.1 * v.0;
         let h = RowVector4::new(
             normal.0 / facing,
             normal.1 / facing,
-            (expected + mount_m) * n_perp / facing,
+            (mount_m * n_perp(axis) + expected * n_perp(u)) / facing,
             0.0,
         );
-        let innovation = range_m - expected;
+        self.update(h, range_m - expected, sigma_m)
+    }
+
+    /// Corrects the estimate from a measurement of the position along the unit vector `u`:
+    /// `measured_m` with standard deviation `sigma_m` (a surface ahead whose depth along `u` is
+    /// known, less the range to it). Gated as a range is.
+    pub fn correct_position_along(&mut self, u: (f64, f64), measured_m: f64, sigma_m: f64) -> RangeUpdate {
+        let h = RowVector4::new(u.0, u.1, 0.0, 0.0);
+        let innovation = measured_m - (u.0 * self.state[0] + u.1 * self.state[1]);
+        self.update(h, innovation, sigma_m)
+    }
+
+    /// The Kalman update with measurement row `h` and `innovation`, gated at [`GATE_SIGMAS`].
+    fn update(&mut self, h: RowVector4<f64>, innovation: f64, sigma_m: f64) -> RangeUpdate {
         let s = (h * self.cov * h.transpose())[(0, 0)] + sigma_m.powi(2);
         let sigmas = innovation.abs() / s.sqrt();
         if sigmas > GATE_SIGMAS {
@@ -253,10 +303,40 @@ impl PoseFilter {
         self.cov = i_kh * self.cov * i_kh.transpose() + k * k.transpose() * sigma_m.powi(2);
         RangeUpdate::Applied { innovation }
     }
+
+    /// Takes the heading from outside: `yaw_deg` known to `sigma_deg`, uncorrelated with the
+    /// position and the bias (Carto's heading is the IMU's, its drift tracked elsewhere).
+    pub fn set_heading(&mut self, yaw_deg: f64, sigma_deg: f64) {
+        self.state[2] = yaw_deg.to_radians();
+        for k in 0..4 {
+            self.cov[(2, k)] = 0.0;
+            self.cov[(k, 2)] = 0.0;
+        }
+        self.cov[(2, 2)] = sigma_deg.to_radians().powi(2);
+    }
+
+    /// Moves the mean to `pose` and keeps the covariance and the bias: the caller's dead
+    /// reckoning, which already holds every correction made, is the mean between corrections.
+    pub fn set_mean(&mut self, pose: Pose2) {
+        self.state[0] = pose.x;
+        self.state[1] = pose.y;
+        self.state[2] = pose.yaw_deg.to_radians();
+    }
 }
 
-/// The distance along `u` from `from` to the first occupied cell, within `max_m`, and that
-/// cell's centre; marched in quarter cells.
+/// The rays that sample a sonar's cone and the incidence past which a surface is silent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fan<'a> {
+    /// Each ray's angle from the sonar's axis, counter-clockwise degrees.
+    pub ray_offsets_deg: &'a [f64],
+    /// A surface met further than this from head-on returns no echo, degrees.
+    pub incidence_limit_deg: f64,
+}
+
+/// The distance along `u` from `from` to the first surface within `max_m`, and a point on it:
+/// the middle of the first run of occupied cells the ray crosses (a wall's cells, or the band
+/// an echo marked), so that a surface seen from where it was mapped is expected where it was
+/// heard, not a half band short. Marched in quarter cells.
 fn first_occupied(
     grid: &EvidenceGrid,
     from: (f64, f64),
@@ -264,19 +344,24 @@ fn first_occupied(
     max_m: f64,
 ) -> Option<(f64, (f64, f64))> {
     let step = grid.params().resolution_m / 4.0;
-    let mut last = None;
+    let at = |d: f64| (from.0 + d * u.0, from.1 + d * u.1);
+    let occupied = |d: f64| {
+        let p = at(d);
+        grid.log_odds(grid.cell_of(p.0, p.1)) >= SURFACE_LOG_ODDS
+    };
     let mut d = 0.0;
-    while d <= max_m {
-        let c = grid.cell_of(from.0 + d * u.0, from.1 + d * u.1);
-        if last != Some(c) {
-            last = Some(c);
-            if grid.cell(c) == Occupancy::Occupied {
-                return Some((d, grid.centre(c)));
-            }
-        }
+    while d <= max_m && !occupied(d) {
         d += step;
     }
-    None
+    if d > max_m {
+        return None;
+    }
+    let entry = d;
+    while d - entry < MAX_SURFACE_DEPTH_M && occupied(d + step) {
+        d += step;
+    }
+    let middle = 0.5 * (entry + d);
+    Some((middle, at(middle)))
 }
 
 /// The unit normal of the surface at `hit`, facing against `u`: across the principal axis of the
@@ -285,7 +370,7 @@ fn surface_normal(grid: &EvidenceGrid, hit: (f64, f64), u: (f64, f64)) -> (f64, 
     let pts: Vec<(f64, f64)> = grid
         .cells_in_circle(hit, 3.0 * grid.params().resolution_m)
         .into_iter()
-        .filter(|&c| grid.cell(c) == Occupancy::Occupied)
+        .filter(|&c| grid.log_odds(c) >= SURFACE_LOG_ODDS)
         .map(|c| grid.centre(c))
         .collect();
     if pts.len() < 3 {

@@ -35,19 +35,13 @@
 //!   the `MOVE_DONE`, takes the turn back in Carto's belief (Cute never heard of it), and the
 //!   next move faces the old heading first, as after a turn cut in the middle.
 //!
-//! - **Along-track fix.** Two straight readings at rest, before and after one successful FORWARD
-//!   along the same heading, both with an echo closer than [`ALONG_FIX_MAX_M`], say how far the
-//!   robot really went (the difference of the ranges, if both come from the same wall). When the
-//!   wheels disagree by less than [`ALONG_FIX_MAX_ERROR_M`] (more means another object answered),
-//!   the difference corrects the odometry's position along the track, weighted as a Kalman
-//!   update would: gain = σw² / (σw² + 2σs²), with σw the wheels' error over one cell
-//!   ([`CartoConfig::odometry_sigma_per_m`]) and σs one reading's ([`CartoConfig::sonar_sigma_m`]).
-//!   With the default robot (σs 3 mm, σw 4.5 mm per 0.45 m cell) the gain is 0.53; with a 2 cm
-//!   sonar it is 0.03. Wheel slip and the stop error then do not add up over a row.
-//! - **Wall fix.** A straight reading closer than [`WALL_FIX_MAX_M`] that matches a surface seen
-//!   before from the same row or column ([`crate::walls`]) corrects the position along the track
-//!   absolutely, with the same gain, instead of the relative fix: drift that built up over a long
-//!   mission is removed too ([`CartoConfig::wall_fix`]).
+//! - **Belief.** Every straight reading at rest goes to the localiser
+//!   ([`crate::estimate::localiser`]): the pose filter, grown by the motion since the last
+//!   reading, corrects the position along the heading from the range to a surface heard before
+//!   from the same row or column, or to the one heard from the cell behind (with a floor plan,
+//!   against the plan in every direction), and the odometry is moved by the correction. A bump,
+//!   a push or a stall widens the belief first, so the gate opens and the next readings weigh
+//!   more than the wheels.
 //!
 //! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
 //!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
@@ -113,6 +107,7 @@ use robot_model::time::Instant;
 
 use super::{DriveReading, Pilot, Stage, TaskKind};
 use crate::CartoConfig;
+use crate::estimate::sonar::Reading;
 use crate::motor::Motor;
 use crate::odometry::CellOffset;
 use crate::sensors::SensorState;
@@ -125,8 +120,6 @@ const SHIFT_STEP_M: f64 = 0.01;
 /// centre, metres: a move ends within 1 cm, a shift is at least 2 cm, and a run's position error
 /// is measured from the centre of the cell Cute believes at every `MOVE_DONE`.
 const RECENTRE_FROM_M: f64 = 0.03;
-/// Echoes further than this are not used for the along-track fix (the cone widens), metres.
-pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
 /// degrees: they look beside the path of the FORWARD that may follow.
 pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
@@ -135,18 +128,12 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
 const FAR_SIGMAS: f64 = 3.0;
-/// A larger disagreement between sonar and wheels means two different objects answered, metres.
-pub const ALONG_FIX_MAX_ERROR_M: f64 = 0.05;
-/// Echoes further than this are not kept as walls nor matched with them, metres (the cone is
-/// then at most 26 cm wide, about the body's width).
-pub const WALL_FIX_MAX_M: f64 = 1.0;
 
-/// A straight reading at rest, remembered for the along-track fix.
+/// A straight reading at rest, remembered as the stall watch's first echo.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Straight {
     pose: GridPose,
     range_m: f64,
-    along_m: f64,
 }
 
 /// The geometry the checks need, from [`CartoConfig`].
@@ -154,10 +141,6 @@ pub(super) struct Straight {
 pub(super) struct Safety {
     scan_deg: f64,
     cell_m: f64,
-    /// Kalman gain of the along-track fix (0: off).
-    along_fix_gain: f64,
-    /// Also fix against the walls seen before.
-    wall_fix: bool,
     mount_m: f64,
     half_cone_deg: f64,
     max_range_m: f64,
@@ -188,14 +171,6 @@ impl Safety {
         Safety {
             scan_deg: cfg.scan_deg.abs(),
             cell_m: cfg.cell_size_m,
-            along_fix_gain: if cfg.along_fix {
-                let wheels = (cfg.odometry_sigma_per_m * cfg.cell_size_m).powi(2);
-                let sonar = 2.0 * cfg.sonar_sigma_m.powi(2);
-                if wheels + sonar > 0.0 { wheels / (wheels + sonar) } else { 0.0 }
-            } else {
-                0.0
-            },
-            wall_fix: cfg.wall_fix,
             mount_m: cfg.sonar_mount_m,
             half_cone_deg: 0.5 * cfg.sonar_cone_deg,
             max_range_m: cfg.sonar_max_m,
@@ -262,45 +237,31 @@ impl Pilot {
         Some(Pose2 { x, y, yaw_deg: nominal + turned })
     }
 
-    /// The along-track fix (module docs) from the straight reading `cm` taken at rest now; the
-    /// reading is remembered for the next one.
-    pub(super) fn along_fix(&mut self, cm: Option<f32>, motor: &mut Motor) {
-        let (Some(pose), Some(cm)) = (self.pose, cm) else {
+    /// Corrects the belief from the straight reading `cm` taken at rest now (module docs,
+    /// "Belief"): the localiser's correction moves the odometry, and the reading is remembered
+    /// for the stall watch.
+    pub(super) fn localise(
+        &mut self,
+        now: Instant,
+        cm: Option<f32>,
+        motor: &mut Motor,
+        sensors: &SensorState,
+    ) {
+        let (Some(pose), Some(robot)) = (self.pose, self.believed(motor, sensors)) else {
             self.last_straight = None;
             return;
         };
-        let range_m = f64::from(cm) / 100.0;
-        let along_m = motor.odometry().offset().along_m;
-        let s = self.safety;
-        let usable = s.wall_fix && s.along_fix_gain > 0.0 && range_m <= WALL_FIX_MAX_M;
-        let ahead_m = s.mount_m + range_m;
-        let wall = if usable { self.walls.drift(pose, s.cell_m, along_m, ahead_m) } else { None };
-        let prev = self.last_straight.take();
-        if let Some(drift) = wall {
-            let fix = s.along_fix_gain * drift;
-            tracing::debug!(drift, fix, "along-track fix from a wall seen before");
-            self.counters.wall_fixes += 1;
-            motor.correct_along(fix);
-        } else if let Some(prev) = prev
-            && prev.pose.heading == pose.heading
-            && prev.pose.ahead() == Some((pose.x, pose.y))
-            && prev.range_m <= ALONG_FIX_MAX_M
-        {
-            let by_sonar = prev.range_m - range_m;
-            let by_wheels = s.cell_m + along_m - prev.along_m;
-            let error = by_wheels - by_sonar;
-            if error.abs() <= ALONG_FIX_MAX_ERROR_M {
-                let fix = -s.along_fix_gain * error;
-                tracing::debug!(by_sonar, by_wheels, fix, "along-track fix from the range ahead");
-                motor.correct_along(fix);
-            }
+        let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
+        let (dx, dy) = self.localiser.at_rest(now, pose, robot, reading);
+        if dx != 0.0 || dy != 0.0 {
+            // into the nominal frame the odometry's offset is kept in
+            let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
+            let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
+            tracing::debug!(fix.along_m, fix.left_m, "belief corrected from the range at rest");
+            self.counters.pose_fixes += 1;
+            motor.correct_offset(fix);
         }
-        if usable && wall.is_none() {
-            // a new wall, placed from the position the relative fix has just corrected
-            self.walls.remember(pose, s.cell_m, motor.odometry().offset().along_m, ahead_m);
-        }
-        let along_m = motor.odometry().offset().along_m;
-        self.last_straight = Some(Straight { pose, range_m, along_m });
+        self.last_straight = cm.map(|cm| Straight { pose, range_m: f64::from(cm) / 100.0 });
     }
 
     /// Keeps a reading taken at rest: the echo `cm` from the sonar as a point (`None`: no echo),
@@ -374,6 +335,7 @@ impl Pilot {
         }
         tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
         self.counters.turn_readings += 1;
+        self.localiser.learn(robot, Reading::Echo(range));
         self.keep_on_far_edge(robot, target, range);
     }
 
