@@ -6,7 +6,7 @@
 #
 #   carto/bench/idle-cpu.sh [--client] [CARTO_BINARY] [SECONDS]
 #
-# Run from the workspace root after `cargo build --release -p sim -p carto`.
+# Run from the workspace root after `cargo build --release -p explobot -p carto`.
 set -euo pipefail
 client=0
 if [[ "${1:-}" == "--client" ]]; then client=1; shift; fi

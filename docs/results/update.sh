@@ -158,7 +158,7 @@ run_all() {
     commit="$commit (binary $EXPLOBOT given, not built here)"
   else
     export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$HOME/.cache/explobot-target}"
-    cargo build --release --locked -p sim --bin explobot
+    cargo build --release --locked -p explobot --bin explobot
     explobot="$CARGO_TARGET_DIR/release/explobot"
   fi
   machine="$(uname -m), $(nproc) cores"
