@@ -1,22 +1,20 @@
-//! Surfaces the sonar ranged straight ahead at rest, remembered on the grid: absolute along-track
-//! fixes.
+//! Surfaces the sonar ranged straight ahead at rest, remembered on the grid: what the localiser
+//! (`estimate/localiser.rs`) compares a later straight range with.
 //!
 //! Concept: a straight reading at rest says where a surface is along the grid heading, `depth`
 //! metres from the grid's origin: the robot's believed position along the heading, plus the
 //! sonar's mount offset, plus the range. The first reading of a surface is kept as a [`Wall`]. A
 //! later reading along the same heading, from the same row (facing east or west) or column
-//! (facing north or south), whose depth lies within [`MATCH_M`] of a kept wall's, is taken to be
-//! the same surface: the difference is how far the dead reckoning drifted since the wall was
-//! first seen, and the pilot corrects the odometry by it (`pilot/safety.rs`).
+//! (facing north or south), is compared with the kept wall whose depth is nearest: the
+//! difference is how far the dead reckoning drifted since the wall was first seen, and the
+//! localiser's filter weighs it (its gate decides whether it is the same surface).
 //!
-//! Why: the relative fix (two readings, one move apart) stops the error of one move from adding
-//! up along a row, but not drift that has built up. A serpentine sweep faces the same walls from
-//! the same row or column again and again (the wall it turns towards at every row end, every cell
-//! of a row on the second pass): against a reading taken when the robot still knew where it was,
-//! those readings hold the position.
+//! Why: a serpentine sweep faces the same walls from the same row or column again and again
+//! (the wall it turns towards at every row end, every cell of a row on the second pass): against
+//! a reading taken when the robot still knew where it was, those readings hold the position.
 //!
 //! Decisions:
-//! - only echoes closer than `pilot::safety::WALL_FIX_MAX_M` (1 m) are kept or matched: the cone
+//! - only echoes closer than `estimate::localiser::WALL_MAX_M` (1 m) are kept or matched: the cone
 //!   is then no wider than the body, so the echo comes from what lies straight ahead. Far echoes
 //!   come from whatever is nearest in a wide cone; matching them against near ones moved the
 //!   robot by centimetres in furnished rooms;
