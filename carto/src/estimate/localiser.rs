@@ -15,7 +15,11 @@
 //!   corrects. Without one, the surfaces heard straight ahead at rest ([`crate::walls`]): a
 //!   surface kept from an echo within [`WALL_MAX_M`] when facing the same heading from the same
 //!   row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
-//!   measurement of the position along the heading with the noise of two readings. Why not the
+//!   measurement of the position along the heading with the noise of two readings, *relative to
+//!   the pose the surface was placed from* ([`PoseFilter::correct_position_since`]): the
+//!   surface's depth carries that pose's error, so only the uncertainty added since (the motion,
+//!   a touch) is corrected; taken as absolute positions, the fixes counted the old uncertainty
+//!   again at every reading and pulled the belief too far (`docs/journal/world-model.md`). Why not the
 //!   evidence grid: an echo marks an arc across the cone, and seen from another row its off-axis
 //!   cells lie up to `1 − cos 7.5°` of the range nearer than the surface; ranges compared with
 //!   those arcs pulled the belief away from the walls (`docs/journal/world-model.md`).
@@ -110,6 +114,15 @@ pub struct LocaliserCounters {
     pub touches: u64,
 }
 
+/// A straight reading at rest: where it was taken, the depth along the heading of the surface it
+/// heard, and the variance of the position along the heading then.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Straight {
+    pose: GridPose,
+    depth_m: f64,
+    placed_var_m2: f64,
+}
+
 /// The belief (see the module docs).
 #[derive(Debug, Clone)]
 pub struct Localiser {
@@ -126,8 +139,8 @@ pub struct Localiser {
     known_grid: Option<EvidenceGrid>,
     /// Surfaces heard straight ahead at rest, as depths along a grid heading.
     walls: Walls,
-    /// The last straight reading at rest: where, the depth of its surface, and its range.
-    last_straight: Option<(GridPose, f64)>,
+    /// The last straight reading at rest.
+    last_straight: Option<Straight>,
     /// Where the sonar was when the grid last learnt a reading, and what it read.
     last_learnt: Option<(Pose2, Reading)>,
     fan_deg: Vec<f64>,
@@ -245,21 +258,22 @@ impl Localiser {
             let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };
             filter.correct_echo(known, self.mount_m, &fan, range, self.range_sigma_m)
         } else {
-            let depth = |f: &PoseFilter| u.0 * f.mean().x + u.1 * f.mean().y + ahead;
+            let depth = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
             let mut update = RangeUpdate::NoSurface;
             if range <= WALL_MAX_M
-                && let Some(gap) = self.walls.nearest_gap(pose.heading, lateral, depth(filter))
+                && let Some(wall) = self.walls.nearest(pose.heading, lateral, depth)
             {
-                let at_wall = depth(filter) + gap - ahead;
-                update = filter.correct_position_along(u, at_wall, self.pair_sigma_m);
+                let at = wall.depth_m - ahead;
+                update = filter.correct_position_since(u, at, self.pair_sigma_m, wall.placed_var_m2);
                 matched_wall = matches!(update, RangeUpdate::Applied { .. });
             }
             if !matched_wall
-                && let Some((prev, prev_depth)) = self.last_straight
-                && prev.heading == pose.heading
-                && prev.ahead() == Some((pose.x, pose.y))
+                && let Some(prev) = self.last_straight
+                && prev.pose.heading == pose.heading
+                && prev.pose.ahead() == Some((pose.x, pose.y))
             {
-                update = filter.correct_position_along(u, prev_depth - ahead, self.pair_sigma_m);
+                let at = prev.depth_m - ahead;
+                update = filter.correct_position_since(u, at, self.pair_sigma_m, prev.placed_var_m2);
             }
             update
         };
@@ -276,11 +290,12 @@ impl Localiser {
             RangeUpdate::Rejected { .. } => self.counters.rejected += 1,
             RangeUpdate::NoSurface => self.counters.unmatched += 1,
         }
-        let depth = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
+        let depth_m = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
+        let placed_var_m2 = filter.variance_along(u);
         if range <= WALL_MAX_M && !matched_wall {
-            self.walls.remember_depth(pose.heading, lateral, depth);
+            self.walls.remember(pose.heading, lateral, depth_m, placed_var_m2);
         }
-        self.last_straight = (range <= RELATIVE_MAX_M).then_some((pose, depth));
+        self.last_straight = (range <= RELATIVE_MAX_M).then_some(Straight { pose, depth_m, placed_var_m2 });
         self.finish(now, believed, reading)
     }
 
@@ -372,14 +387,15 @@ mod tests {
 
     #[test]
     fn a_wall_heard_before_corrects_the_later_readings() {
-        // a wall 1.0 m east: heard from the start (87 cm), then no echo from the next cell
+        // a wall 1.1 m east: heard from the start (97 cm), then no echo from the next cell
         let mut loc = Localiser::new(&CartoConfig::default());
-        assert_eq!(loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(0.87)), (0.0, 0.0));
+        assert_eq!(loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(0.97)), (0.0, 0.0));
         assert_eq!(loc.at_rest(ms(2000), cell(1), east(0.45), Reading::NoEcho), (0.0, 0.0));
         // from the cell after, the wheels say 0.90 m; the body is at 0.92 m (13 cm to the sonar)
-        let (dx, dy) =
-            loc.at_rest(ms(4000), cell(2), east(0.90), Reading::Echo(1.0 - 0.92 - 0.13 + 0.87 - 0.87));
-        assert!(dx > 0.008 && dx < 0.02 && dy.abs() < 1e-9, "corrected by {dx}");
+        let (dx, dy) = loc.at_rest(ms(4000), cell(2), east(0.90), Reading::Echo(1.1 - 0.92 - 0.13));
+        // two cells of wheel noise since the wall was placed, against two readings' noise
+        let gain = two_readings_gain(2.0);
+        assert!((dx - 0.02 * gain).abs() < 1e-3 && dy.abs() < 1e-9, "corrected by {dx}, gain {gain}");
         assert_eq!(loc.counters().applied, 1);
     }
 
@@ -388,9 +404,20 @@ mod tests {
         // 1.5 m to the wall: too far to keep as a surface, near enough to pair with the next
         let mut loc = Localiser::new(&CartoConfig::default());
         loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(1.50));
-        // the wheels say 0.45 m, the range says 0.47 m
+        // the wheels say 0.45 m, the range says 0.47 m: one cell of wheel noise is corrected
         let (dx, _) = loc.at_rest(ms(2000), cell(1), east(0.45), Reading::Echo(1.03));
-        assert!(dx > 0.008 && dx < 0.02, "corrected by {dx}");
+        let gain = two_readings_gain(1.0);
+        assert!((dx - 0.02 * gain).abs() < 1e-3, "corrected by {dx}, gain {gain}");
+    }
+
+    /// The gain of a fix against an earlier reading `cells` moves of 0.45 m behind, with the
+    /// default robot: the wheels' variance over those moves (each adds its own) against two
+    /// readings' (noise and 1 cm steps).
+    fn two_readings_gain(cells: f64) -> f64 {
+        let cfg = CartoConfig::default();
+        let wheels = cells * (cfg.odometry_sigma_per_m * 0.45).powi(2);
+        let readings = 2.0 * (cfg.sonar_sigma_m.powi(2) + 0.01f64.powi(2) / 12.0);
+        wheels / (wheels + readings)
     }
 
     #[test]

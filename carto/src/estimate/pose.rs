@@ -20,6 +20,9 @@
 //!   A range more than [`GATE_SIGMAS`] standard deviations from the expected one is rejected
 //!   (another object, or an echo from the cone's edge), and so is a surface met at a grazing
 //!   angle (the echo would be lost: [`MAX_INCIDENCE_DEG`]).
+//! - **Correct against an earlier pose** ([`PoseFilter::correct_position_since`]): a range to a
+//!   surface placed from an earlier pose measures the motion since then, not the position; only
+//!   the variance added since is corrected (stochastic cloning, the correlation taken whole).
 //! - **Widen** ([`PoseFilter::widen`]) after a touch, a push or a stall: the body moved in a way
 //!   the wheels did not see.
 //!
@@ -280,13 +283,50 @@ impl PoseFilter {
         self.update(h, range_m - expected, sigma_m)
     }
 
-    /// Corrects the estimate from a measurement of the position along the unit vector `u`:
-    /// `measured_m` with standard deviation `sigma_m` (a surface ahead whose depth along `u` is
-    /// known, less the range to it). Gated as a range is.
-    pub fn correct_position_along(&mut self, u: (f64, f64), measured_m: f64, sigma_m: f64) -> RangeUpdate {
+    /// Corrects the estimate from a measurement of the position along the unit vector `u` that
+    /// was made *relative to an earlier pose*: `measured_m` is the depth of a surface placed from
+    /// that pose (whose position along `u` then had variance `earlier_var_m2`), less the range to
+    /// it now, with standard deviation `sigma_m` (the two readings' noise).
+    ///
+    /// The surface's depth carries the earlier pose's error, and so does the estimate now: only
+    /// the variance added since (the motion, a touch) is seen by this measurement, the rest
+    /// cancels. This is the update of stochastic cloning (the earlier pose kept as a state,
+    /// correlated with the current one) with the correlation taken as all of the earlier
+    /// variance: the gain along `u` is `added / (added + σ²)` with `added` the along-`u`
+    /// variance now less `earlier_var_m2`, and the variance left along `u` never falls below
+    /// the earlier one. Treated as an absolute position instead, every fix would count the
+    /// earlier uncertainty as news and pull the belief by too much. Gated on the same
+    /// innovation variance.
+    pub fn correct_position_since(
+        &mut self,
+        u: (f64, f64),
+        measured_m: f64,
+        sigma_m: f64,
+        earlier_var_m2: f64,
+    ) -> RangeUpdate {
         let h = RowVector4::new(u.0, u.1, 0.0, 0.0);
         let innovation = measured_m - (u.0 * self.state[0] + u.1 * self.state[1]);
-        self.update(h, innovation, sigma_m)
+        let now_var = self.variance_along(u);
+        let added = (now_var - earlier_var_m2.max(0.0)).max(0.0);
+        let s = added + sigma_m.powi(2);
+        if s <= 0.0 || now_var <= 0.0 {
+            return RangeUpdate::NoSurface;
+        }
+        let sigmas = innovation.abs() / s.sqrt();
+        if sigmas > GATE_SIGMAS {
+            return RangeUpdate::Rejected { sigmas };
+        }
+        let k = self.cov * h.transpose() * (added / now_var) / s;
+        self.state += k * innovation;
+        self.cov -= k * k.transpose() * s;
+        self.cov = 0.5 * (self.cov + self.cov.transpose());
+        RangeUpdate::Applied { innovation }
+    }
+
+    /// The variance of the position along the unit vector `u`, square metres.
+    pub fn variance_along(&self, u: (f64, f64)) -> f64 {
+        let p = &self.cov;
+        (u.0 * u.0 * p[(0, 0)] + 2.0 * u.0 * u.1 * p[(0, 1)] + u.1 * u.1 * p[(1, 1)]).max(0.0)
     }
 
     /// The Kalman update with measurement row `h` and `innovation`, gated at [`GATE_SIGMAS`].
@@ -471,6 +511,35 @@ mod tests {
         g.state[1] = 0.9;
         g.state[2] = 10f64.to_radians();
         assert_eq!(g.correct_range(&walls(), 0.13, 1.0, 0.005), RangeUpdate::NoSurface);
+    }
+
+    #[test]
+    fn a_fix_against_an_earlier_pose_corrects_only_what_was_added_since() {
+        let east = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        // 3 cm of uncertainty already when the surface was placed, 0.5 cm added by one cell
+        let mut f = PoseFilter::new(east, 0.03, 0.5);
+        let earlier = f.variance_along((1.0, 0.0));
+        f.predict(0.45, 0.0, 0.0, 1.5, &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() });
+        let added = f.variance_along((1.0, 0.0)) - earlier;
+        // the surface says the body is 1 cm further than the wheels; the readings' σ is 5 mm
+        let update = f.correct_position_since((1.0, 0.0), 0.46, 0.005, earlier);
+        assert!(matches!(update, RangeUpdate::Applied { .. }), "{update:?}");
+        let gain = added / (added + 0.005f64.powi(2));
+        assert!((f.mean().x - (0.45 + gain * 0.01)).abs() < 1e-6, "{} vs gain {gain}", f.mean().x);
+        // what was known before the motion is not learnt again
+        assert!(f.variance_along((1.0, 0.0)) >= earlier, "{} < {earlier}", f.variance_along((1.0, 0.0)));
+        // the same innovation, taken as an absolute position with the same noise, moves it more
+        let mut absolute = PoseFilter::new(east, 0.03, 0.5);
+        absolute.predict(0.45, 0.0, 0.0, 1.5, &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() });
+        absolute.correct_position_since((1.0, 0.0), 0.46, 0.005, 0.0);
+        assert!(absolute.mean().x - 0.45 > 1.5 * (f.mean().x - 0.45));
+        // nothing added since: nothing to correct, and 5 σ off is another surface
+        let still = f.clone();
+        let now = f.variance_along((1.0, 0.0));
+        let one_sigma_on = f.mean().x + 0.005;
+        assert!(matches!(f.correct_position_since((1.0, 0.0), one_sigma_on, 0.005, now), RangeUpdate::Applied { .. }));
+        assert_eq!(f.mean(), still.mean());
+        assert!(matches!(f.correct_position_since((1.0, 0.0), 0.60, 0.005, 0.0), RangeUpdate::Rejected { .. }));
     }
 
     #[test]
