@@ -74,6 +74,8 @@ pub struct CartoStats {
     pub bumps: u64,
     /// FORWARDs refused because a known echo lay in the body's path.
     pub corridor_blocked: u64,
+    /// FORWARDs driven on a track beside the line through the centres, clear of a known echo.
+    pub forwards_aside: u64,
     /// Turns that drove back or forth first to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
@@ -578,6 +580,7 @@ impl Carto {
             obstacles: p.obstacles,
             bumps: p.bumps,
             corridor_blocked: p.corridor_blocked,
+            forwards_aside: p.forwards_aside,
             turns_shifted: p.turns_shifted,
             turns_recentred: p.turns_recentred,
             turns_refused: p.turns_refused,

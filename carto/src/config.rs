@@ -91,6 +91,11 @@ pub struct CartoConfig {
     pub sonar_max_m: f64,
     /// Room kept between the swept body and any echo point Carto knows, metres.
     pub clearance_m: f64,
+    /// How far from a cell's centre a FORWARD may end, metres: a FORWARD whose corridor lacks
+    /// [`CartoConfig::clearance_m`] on one side drives on a track moved aside by up to this less
+    /// [`CartoConfig::lateral_tolerance_m`] (`pilot/safety.rs`, "Corridor"). The twin scores the
+    /// cells a robot reaches stopping within the same 2 cm (the profile's `scoring`).
+    pub stop_within_m: f64,
     /// A surface met further than this from head-on returns no echo, degrees (the profile's
     /// incidence limit; the localiser's sensor model, `estimate/localiser.rs`).
     pub sonar_incidence_deg: f64,
@@ -230,6 +235,7 @@ impl Default for CartoConfig {
             sonar_cone_deg: 15.0,
             sonar_max_m: 4.0,
             clearance_m: 0.02,
+            stop_within_m: 0.02,
             safe_turns: true,
             strafe_shifts: true,
             sonar_incidence_deg: 22.5,

@@ -165,6 +165,9 @@ pub struct PilotCounters {
     pub bad_values: u64,
     /// FORWARDs refused because an echo of the scan lay in the body's path.
     pub corridor_blocked: u64,
+    /// FORWARDs driven on a track beside the line through the centres, clear of an echo
+    /// (`pilot/safety.rs`, "Corridor").
+    pub forwards_aside: u64,
     /// Turns that first drove back or forth to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
@@ -356,6 +359,9 @@ pub struct Pilot {
     last_straight: Option<safety::Straight>,
     /// Surfaces seen straight ahead, for the absolute along-track fix.
     localiser: Localiser,
+    /// The heading of the last FORWARD made from the stored pose (`None`: none yet): the way the
+    /// body came, for the shift before a turn (`pilot/safety.rs`, "Turns").
+    travel: Option<Heading>,
     /// When the last reading kept during a turn arrived.
     last_turn_reading: Option<Instant>,
     /// The echoes of the running FORWARD (`pilot/stall.rs`); `None` when the watch is off.
@@ -398,6 +404,7 @@ impl Pilot {
             last_straight: None,
             localiser: Localiser::new(cfg),
             last_turn_reading: None,
+            travel: None,
             push_watch: None,
             push_watch_on: cfg.push_watch,
             stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m, cfg.drive_timing_m())),
@@ -505,6 +512,7 @@ impl Pilot {
                             self.forget_surroundings();
                             self.last_straight = None;
                             self.localiser.reset();
+                            self.travel = None;
                         }
                         self.pose = Some(pose);
                     }
@@ -915,6 +923,7 @@ impl Pilot {
         };
         match kind {
             Move::Forward => {
+                self.travel = Some(pose.heading);
                 if let Some((x, y)) = pose.ahead() {
                     pose.x = x;
                     pose.y = y;

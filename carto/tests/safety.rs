@@ -64,6 +64,38 @@ fn a_turn_beside_a_wall_ahead_backs_off_first_and_drives_back_to_the_centre_befo
 }
 
 #[test]
+fn after_a_turn_on_the_spot_the_shift_before_the_next_turn_goes_back_the_way_the_body_came() {
+    let mut h = ready_with(fake::test_config());
+    // east into the next cell, then a turn to face south
+    h.robot.distance_cm = 80.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no FORWARD");
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 2), "no turn");
+    // a wall 19 cm south of the centre, inside the 19.7 cm turning circle: the FORWARD is
+    // refused, the RIGHT must shift first. Backing off (north) 2 cm would clear it, but north of
+    // the body no reading ever looked; 6 cm west, back along the row it drove, clears it too
+    blocked_forward(&mut h, 6.0);
+    let (x0, y0) = (h.robot.x, h.robot.y);
+    h.send(cartography(Command::Right));
+    let (mut north, mut west) = (f64::MIN, f64::MIN);
+    for _ in 0..12_000 {
+        (north, west) = (north.max(h.robot.y - y0), west.max(x0 - h.robot.x));
+        h.run_ms(1);
+        if h.move_done_count() == 4 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 4, "no MOVE_DONE for the second RIGHT");
+    assert_eq!(h.carto.stats().turns_shifted, 1, "{:?}", h.carto.stats());
+    // north of the body, behind its new heading, no reading ever looked: it stays where it was;
+    // west, along the row it drove, it shifts until the circle clears the wall
+    assert!(north <= 0.005, "shifted {north:.3} m north, behind the heading it turned to");
+    assert!(west >= 0.05, "shifted only {west:.3} m west, the way it came");
+}
+
+#[test]
 fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows() {
     // a 5 cm clearance, so that the surface bars a good part of the way back, and 0.45 m cells,
     // so that a shift may reach 11 cm
@@ -121,6 +153,34 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
     assert_eq!(h.carto.stats().corridor_blocked, 1);
     assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
     assert!(h.robot.yaw.to_degrees().abs() <= 2.5, "left facing {:.1} deg", h.robot.yaw.to_degrees());
+}
+
+#[test]
+fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
+    // cell (5, 5) facing east, 0.30 m cells: a known point 25 cm ahead and 13.5 cm left of the
+    // centre line, 5 mm inside the 14 cm half corridor (body 12 cm and 2 cm of clearance)
+    let forward = |stop_within_m: f64| {
+        let mut h = ready_with(CartoConfig { stop_within_m, ..fake::test_config() });
+        h.robot.distance_cm = -1.0;
+        h.run_ms(150);
+        h.carto.add_known_surfaces([(5.0 * 0.30 + 0.25, -5.0 * 0.30 + 0.135)]);
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+        h
+    };
+    // with 2 cm allowed off the centre (1 cm once the lateral tolerance is taken off), the
+    // track 7.5 mm right of the line clears the point: the robot drives and ends on it
+    let h = forward(0.02);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let stats = h.carto.stats();
+    assert_eq!((stats.forwards_aside, stats.corridor_blocked), (1, 0));
+    assert!((h.robot.x - 0.30).abs() <= 0.015, "drove {:.3} m", h.robot.x);
+    assert!((-0.0175..=0.0).contains(&h.robot.y), "ended {:.4} m left of the line", h.robot.y);
+    // with no room off the centre it is refused, as before
+    let h = forward(0.01);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().corridor_blocked, 1);
+    assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
 }
 
 #[test]
@@ -255,8 +315,9 @@ fn a_reading_in_a_turn_is_kept_on_the_edge_of_the_cone_away_from_the_path() {
     let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
     assert_eq!(seen, DROVE_SOUTH);
-    // with a cone of no width the edge is the central ray, and the same reading blocks
-    let narrow = CartoConfig { sonar_cone_deg: 0.0, ..fake::test_config() };
+    // with a cone of no width the edge is the central ray, and the same reading blocks (with no
+    // room to drive on a track aside: 13 cm beside the path, it would clear the point)
+    let narrow = CartoConfig { sonar_cone_deg: 0.0, stop_within_m: 0.01, ..fake::test_config() };
     let (seen, kept) = forward_after_a_turn(narrow, Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
     assert_eq!(seen, BLOCKED_SOUTH);

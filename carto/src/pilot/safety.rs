@@ -10,15 +10,26 @@
 //! - **Corridor.** The FORWARD runs only if no echo point lies in the rectangle the body sweeps:
 //!   as wide as the body plus [`CartoConfig::clearance_m`] either side, from the front face to the
 //!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
-//!   threshold does). Otherwise Carto answers
-//!   `SET_OBSTACLE_POSITION` for the cell ahead, as for a close straight echo.
+//!   threshold does). When an echo point lies in it, the FORWARD may run on a track beside the
+//!   line through the centres, up to [`CartoConfig::stop_within_m`] less
+//!   [`CartoConfig::lateral_tolerance_m`] from it (the move ends within that tolerance of its
+//!   track), in steps of [`ASIDE_STEP_M`], nearest first: the corridor along that track must hold
+//!   no point (the mecanum wheels strafe to it while driving; the body's own footprint is free).
+//!   The reason: a passage that leaves the body less than the clearance at the centre, but
+//!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
+//!   the robot that came through it one way was refused the way back, a trap Cute could not
+//!   leave. When no track clears, Carto answers `SET_OBSTACLE_POSITION` for the cell ahead, as
+//!   for a close straight echo.
 //! - **Footprint.** Before every reading at rest and every turn check, the points inside the
 //!   body's rectangle where Carto believes it stands are forgotten, the echoes heard moving
 //!   (below) too ([`crate::surroundings::Surroundings::clear_footprint`]).
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
 //!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
 //!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
-//!   most a quarter cell) after which the circle is clear; when none is, it refuses the turn:
+//!   most a quarter cell) after which the circle is clear. "Its heading" is the heading of the
+//!   last FORWARD, not the one the body faces: back along it is the way the body came (space it
+//!   swept), ahead is where it ranged; after a turn on the spot, behind the new heading is space
+//!   no reading covered, and a shift there met walls never heard; when none is, it refuses the turn:
 //!   the reason is logged and the command answered with `MOVE_DONE` only — the link protocol has
 //!   no message that could carry the reason, so Cute takes the turn as done (a known limit,
 //!   `docs/explanation/carto-design.md`). A shift that ends outside its tolerance is checked again from
@@ -126,6 +137,8 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// A look past a turn keeps its readings within its own angle plus this, degrees (the look may
 /// overshoot a little before it settles).
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
+/// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
+const ASIDE_STEP_M: f64 = 0.0025;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
 const FAR_SIGMAS: f64 = 3.0;
 
@@ -164,6 +177,9 @@ pub(super) struct Safety {
     sonar_sigma_m: f64,
     /// [`CartoConfig::drive_timing_m`].
     drive_timing_m: f64,
+    /// How far beside the line through the centres a FORWARD's track may lie, metres
+    /// ([`CartoConfig::stop_within_m`] less the lateral tolerance it ends within).
+    aside_max_m: f64,
 }
 
 impl Safety {
@@ -186,6 +202,7 @@ impl Safety {
             sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
             sonar_sigma_m: cfg.sonar_sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
+            aside_max_m: (cfg.stop_within_m - cfg.lateral_tolerance_m).max(0.0),
         }
     }
 
@@ -548,11 +565,12 @@ impl Pilot {
             return self.fail(now, "scan incomplete: no distance reading at rest");
         }
         let s = self.safety;
+        let mut track_left_m = 0.0;
         if let Some(robot) = self.believed(motor, sensors) {
-            let along = motor.odometry().offset().along_m;
+            let off = motor.odometry().offset();
             // along the track the move stops within its tolerance: the far end is the front face
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
-            let to = s.cell_m - along + s.half_length_m;
+            let to = s.cell_m - off.along_m + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
             let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
             let heard_moving = if known.is_none() {
@@ -560,16 +578,30 @@ impl Pilot {
             } else {
                 None
             };
-            if let Some((a, l)) = heard_moving {
-                // what refused this FORWARD, the turn that may follow keeps clear of too ("Kept
-                // while they hold")
-                self.surroundings.add_point(robot, robot.offset(a, l));
-            }
-            if let Some((a, l)) = known.or(heard_moving) {
-                tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
-                self.counters.corridor_blocked += 1;
-                self.report_obstacle();
-                return self.end_task(now);
+            if let Some(hit) = known.or(heard_moving) {
+                match self.sidestep(robot, off.left_m, to, half) {
+                    Some(track) => {
+                        tracing::info!(
+                            track_left_m = track,
+                            echo_along_m = hit.0,
+                            echo_left_m = hit.1,
+                            "FORWARD on a track aside, clear of an echo beside the path"
+                        );
+                        self.counters.forwards_aside += 1;
+                        track_left_m = track;
+                    }
+                    None => {
+                        if let Some((a, l)) = heard_moving {
+                            // what refused this FORWARD, the turn that may follow keeps clear of
+                            // too ("Kept while they hold")
+                            self.surroundings.add_point(robot, robot.offset(a, l));
+                        }
+                        tracing::info!(along_m = hit.0, left_m = hit.1, "echo in the body's path: no motion");
+                        self.counters.corridor_blocked += 1;
+                        self.report_obstacle();
+                        return self.end_task(now);
+                    }
+                }
             }
         }
         if self.pose.is_none() {
@@ -584,10 +616,30 @@ impl Pilot {
                 watch.push(0.0, straight.range_m);
             }
         }
-        match motor.start_next_cell(now, sensors).map(|_| ()) {
+        match motor.start_next_cell_on(now, track_left_m, sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
             Err(e) => self.fail(now, &e.to_string()),
         }
+    }
+
+    /// The track nearest the line through the cells' centres (that line first), within
+    /// [`Safety::aside_max_m`] of it, along which
+    /// the FORWARD's corridor (`to_m` ahead, `half_m` either side) holds no echo point, from
+    /// `robot`, whose believed position is `left_m` left of the line through the centres
+    /// (module docs, "Corridor"). `None` when no such track clears.
+    fn sidestep(&self, robot: Pose2, left_m: f64, to_m: f64, half_m: f64) -> Option<f64> {
+        let s = self.safety;
+        let steps = (s.aside_max_m / ASIDE_STEP_M).floor() as i32;
+        let tracks = (1..=steps).flat_map(|k| [f64::from(k) * ASIDE_STEP_M, -f64::from(k) * ASIDE_STEP_M]);
+        std::iter::once(0.0).chain(tracks).find(|&track| {
+            // the body strafes from where it stands to the track as it starts: the corridor on
+            // the track is checked from the body's back face, beside it too
+            let (x, y) = robot.offset(0.0, track - left_m);
+            let on_track = Pose2 { x, y, ..robot };
+            [&self.surroundings, &self.edge_echoes]
+                .iter()
+                .all(|points| points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none())
+        })
     }
 
     /// After a shift that did not end within tolerance: the turn runs if the circle is clear from
@@ -634,7 +686,23 @@ impl Pilot {
             return self.start_turn(now, mv, motor, sensors);
         };
         let max_m = 0.25 * s.cell_m;
-        let shift = self.surroundings.clearing_shift(robot, radius, max_m, SHIFT_STEP_M, s.strafe_shifts);
+        // searched in the frame of the last FORWARD's heading: behind is the way the body came
+        // (swept), ahead the way it ranged; after a turn on the spot, behind the new heading is
+        // space no reading covered (module docs, "Turns")
+        let turned_deg = match (self.pose, self.travel) {
+            (Some(pose), Some(travel)) => heading_deg(travel) - heading_deg(pose.heading),
+            _ => 0.0,
+        };
+        let travel_frame = Pose2 { yaw_deg: robot.yaw_deg + turned_deg, ..robot };
+        let shift = self
+            .surroundings
+            .clearing_shift(travel_frame, radius, max_m, SHIFT_STEP_M, s.strafe_shifts)
+            .map(|(along, left)| {
+                // into the body's frame, where the shift is driven
+                let (sin, cos) = turned_deg.to_radians().sin_cos();
+                let round = |v: f64| (v / SHIFT_STEP_M).round() * SHIFT_STEP_M;
+                (round(along * cos - left * sin) + 0.0, round(along * sin + left * cos) + 0.0)
+            });
         match shift {
             Some((metres, left_m)) => {
                 tracing::info!(
