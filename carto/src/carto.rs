@@ -74,6 +74,8 @@ pub struct CartoStats {
     pub bumps: u64,
     /// FORWARDs refused because a known echo lay in the body's path.
     pub corridor_blocked: u64,
+    /// FORWARDs driven on a track beside the line through the centres, clear of a known echo.
+    pub forwards_aside: u64,
     /// Turns that drove back or forth first to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
@@ -82,8 +84,8 @@ pub struct CartoStats {
     pub turns_refused: u64,
     /// Turns that failed (any move error) whose turn back to their start heading was started.
     pub turns_undone: u64,
-    /// Along-track fixes against a wall seen before.
-    pub wall_fixes: u64,
+    /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
+    pub pose_fixes: u64,
     /// Sonar readings kept while a turn ran (near its end, close echoes only).
     pub turn_readings: u64,
     /// Sonar readings kept while a FORWARD drove.
@@ -578,6 +580,7 @@ impl Carto {
             obstacles: p.obstacles,
             bumps: p.bumps,
             corridor_blocked: p.corridor_blocked,
+            forwards_aside: p.forwards_aside,
             turns_shifted: p.turns_shifted,
             turns_recentred: p.turns_recentred,
             turns_refused: p.turns_refused,
@@ -588,7 +591,7 @@ impl Carto {
             pushes: p.pushes,
             heading_jumps: self.sensors.imu_drift_jumps(),
             push_jumps: self.sensors.drift_counts().pushes,
-            wall_fixes: p.wall_fixes,
+            pose_fixes: p.pose_fixes,
             ..self.stats
         }
     }

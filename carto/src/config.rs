@@ -91,12 +91,14 @@ pub struct CartoConfig {
     pub sonar_max_m: f64,
     /// Room kept between the swept body and any echo point Carto knows, metres.
     pub clearance_m: f64,
-    /// Correct the position along the track with the range to a wall ahead (`pilot/safety.rs`,
-    /// "Along-track fix"), weighing the sonar against the wheels by the two sigmas below.
-    pub along_fix: bool,
-    /// Also correct it against the surfaces seen before (`walls.rs`): an absolute fix that
-    /// removes drift built up over a long mission. Needs `along_fix` (its gain).
-    pub wall_fix: bool,
+    /// How far from a cell's centre a FORWARD may end, metres: a FORWARD whose corridor lacks
+    /// [`CartoConfig::clearance_m`] on one side drives on a track moved aside by up to this less
+    /// [`CartoConfig::lateral_tolerance_m`] (`pilot/safety.rs`, "Corridor"). The twin scores the
+    /// cells a robot reaches stopping within the same 2 cm (the profile's `scoring`).
+    pub stop_within_m: f64,
+    /// A surface met further than this from head-on returns no echo, degrees (the profile's
+    /// incidence limit; the localiser's sensor model, `estimate/localiser.rs`).
+    pub sonar_incidence_deg: f64,
     /// Standard deviation of one sonar reading, metres (the profile's noise).
     pub sonar_sigma_m: f64,
     /// Standard deviation of the wheels' distance per metre driven (slip, stop error), metres.
@@ -233,10 +235,10 @@ impl Default for CartoConfig {
             sonar_cone_deg: 15.0,
             sonar_max_m: 4.0,
             clearance_m: 0.02,
+            stop_within_m: 0.02,
             safe_turns: true,
             strafe_shifts: true,
-            along_fix: true,
-            wall_fix: true,
+            sonar_incidence_deg: 22.5,
             sonar_sigma_m: 0.003,
             odometry_sigma_per_m: 0.01,
             cruise_pct: 30.0,
@@ -316,6 +318,7 @@ impl CartoConfig {
             sonar_cone_deg: f(profile.sonar.cone_deg),
             sonar_sigma_m: f(profile.sonar.noise_sigma_cm) / 100.0,
             sonar_max_m: f(profile.sonar.max_cm) / 100.0,
+            sonar_incidence_deg: f(profile.sonar.incidence_limit_deg),
             sonar_lag: Duration::from_micros(u64::from(profile.sonar.cycle_ms) * 500),
             peer_lost_after: Duration::from_millis(u64::from(profile.sensor_board.peer_lost_timeout_ms)),
             motor_baud: profile.serial.motor_baud,

@@ -319,6 +319,13 @@ impl Motor {
     /// heading and track. On success the
     /// odometry's origin moves one cell ahead. Returns the distance it drives, metres.
     pub fn start_next_cell(&mut self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
+        self.start_next_cell_on(now, 0.0, s)
+    }
+
+    /// [`Motor::start_next_cell`] on a track `track_left_m` left of the line through the cells'
+    /// centres: the lateral hold strafes to it while driving, and the move ends on it (within
+    /// [`CartoConfig::lateral_tolerance_m`]).
+    pub fn start_next_cell_on(&mut self, now: Instant, track_left_m: f64, s: &SensorState) -> Result<f64, MoveError> {
         self.fresh_counts(now, s)?;
         self.hold_reference(now, s)?;
         let cell = self.cfg.cell_size_m;
@@ -334,7 +341,8 @@ impl Motor {
         let counts = self.odo.baseline_counts().unwrap_or(self.fresh_counts(now, s)?);
         let hold = self.hold_reference(now, s)?;
         self.last_baseline = Some(counts);
-        self.begin(now, Goal::Distance { baseline: counts, target_m: metres }, Some(hold), cell, s);
+        let goal = Goal::Distance { baseline: counts, target_m: metres };
+        self.begin_move(now, Move { track_left_m, ..Move::new(now, goal, Some(hold), cell) }, s);
         Ok(metres)
     }
 
@@ -357,6 +365,11 @@ impl Motor {
     /// [`Odometry::correct_along`]); the next FORWARD, which aims at a cell centre, drives it away.
     pub fn correct_along(&mut self, metres: f64) {
         self.odo.correct_along(metres);
+    }
+
+    /// Corrects the odometry's offset by `fix` in the nominal frame (see [`Odometry::correct`]).
+    pub fn correct_offset(&mut self, fix: CellOffset) {
+        self.odo.correct(fix);
     }
 
     /// The robot is at the centre of its cell: Cute sent a fresh pose (`SEND_ROBOT_POSITION`).

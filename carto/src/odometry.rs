@@ -120,6 +120,13 @@ impl Odometry {
         self.offset.along_m += metres;
     }
 
+    /// An outside estimate says the robot is `fix` away from where the wheels say, in the
+    /// nominal frame (the localiser's correction).
+    pub fn correct(&mut self, fix: CellOffset) {
+        self.offset.along_m += fix.along_m;
+        self.offset.left_m += fix.left_m;
+    }
+
     /// The robot now believes it is in the cell `metres` ahead: the origin moves there.
     pub fn advance(&mut self, metres: f64) {
         self.offset.along_m -= metres;

@@ -67,12 +67,12 @@ use std::collections::VecDeque;
 use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
+use crate::estimate::localiser::Localiser;
 use crate::motor::Motor;
 use crate::odometry::CellOffset;
 use crate::sensors::{DriftCounts, SensorState};
 use crate::surroundings::Surroundings;
 use crate::ultrasound::{Check, Ultrasound};
-use crate::walls::Walls;
 use robot_model::grid::{GridPose, Heading, Move};
 
 mod commands;
@@ -165,14 +165,17 @@ pub struct PilotCounters {
     pub bad_values: u64,
     /// FORWARDs refused because an echo of the scan lay in the body's path.
     pub corridor_blocked: u64,
+    /// FORWARDs driven on a track beside the line through the centres, clear of an echo
+    /// (`pilot/safety.rs`, "Corridor").
+    pub forwards_aside: u64,
     /// Turns that first drove back or forth to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
     pub turns_recentred: u64,
     /// Turns refused: no shift along the heading cleared the known echoes.
     pub turns_refused: u64,
-    /// Along-track fixes against a wall seen before (`walls.rs`).
-    pub wall_fixes: u64,
+    /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
+    pub pose_fixes: u64,
     /// Turns that failed (any move error) whose turn back to the heading they started from was
     /// started.
     pub turns_undone: u64,
@@ -355,7 +358,10 @@ pub struct Pilot {
     /// The last straight reading at rest, for the along-track fix of the next one.
     last_straight: Option<safety::Straight>,
     /// Surfaces seen straight ahead, for the absolute along-track fix.
-    walls: Walls,
+    localiser: Localiser,
+    /// The heading of the last FORWARD made from the stored pose (`None`: none yet): the way the
+    /// body came, for the shift before a turn (`pilot/safety.rs`, "Turns").
+    travel: Option<Heading>,
     /// When the last reading kept during a turn arrived.
     last_turn_reading: Option<Instant>,
     /// The echoes of the running FORWARD (`pilot/stall.rs`); `None` when the watch is off.
@@ -396,8 +402,9 @@ impl Pilot {
             edge_echoes: Surroundings::default(),
             scan_missing: false,
             last_straight: None,
-            walls: Walls::default(),
+            localiser: Localiser::new(cfg),
             last_turn_reading: None,
+            travel: None,
             push_watch: None,
             push_watch_on: cfg.push_watch,
             stall_watch: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m, cfg.drive_timing_m())),
@@ -441,6 +448,8 @@ impl Pilot {
 
     /// Gives the safety checks known surface points ([`crate::Carto::add_known_surfaces`]).
     pub fn add_known_surfaces(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        let points: Vec<(f64, f64)> = points.into_iter().collect();
+        self.localiser.pin(points.iter().copied());
         self.surroundings.add_fixed(points);
     }
 
@@ -502,7 +511,8 @@ impl Pilot {
                             motor.reset_odometry();
                             self.forget_surroundings();
                             self.last_straight = None;
-                            self.walls.clear();
+                            self.localiser.reset();
+                            self.travel = None;
                         }
                         self.pose = Some(pose);
                     }
@@ -616,6 +626,7 @@ impl Pilot {
     fn drop_everything(&mut self, now: Instant, motor: &mut Motor) {
         motor.stop(now);
         self.last_straight = None;
+        self.localiser.forget_last_reading();
         self.look_pending = None;
         self.reface_failures = 0;
         let mapping = self.current.as_ref().is_some_and(|t| t.kind == TaskKind::Cartography);
@@ -745,7 +756,7 @@ impl Pilot {
                                 format!("obstacle ahead at {cm} cm: no motion"),
                             );
                             if !sensors.bumper_pressed() {
-                                self.along_fix(Some(cm), motor);
+                                self.localise(now, Some(cm), motor, sensors);
                             }
                             self.note_reading(Some(cm), motor, sensors);
                             self.report_obstacle();
@@ -753,7 +764,7 @@ impl Pilot {
                         }
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");
-                            self.along_fix(cm, motor);
+                            self.localise(now, cm, motor, sensors);
                             self.note_reading(cm, motor, sensors);
                             self.scan_missing = false;
                             self.look(now, 0, motor, sensors);
@@ -912,6 +923,7 @@ impl Pilot {
         };
         match kind {
             Move::Forward => {
+                self.travel = Some(pose.heading);
                 if let Some((x, y)) = pose.ahead() {
                     pose.x = x;
                     pose.y = y;
@@ -989,6 +1001,7 @@ impl Pilot {
     /// ahead is reported blocked, and the robot drives back (by default) before `MOVE_DONE`.
     fn end_stopped_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
         self.edge_echoes.clear();
+        self.localiser.touched();
         self.report_obstacle();
         self.back_off_or_end(now, motor, sensors);
     }

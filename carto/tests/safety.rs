@@ -64,6 +64,38 @@ fn a_turn_beside_a_wall_ahead_backs_off_first_and_drives_back_to_the_centre_befo
 }
 
 #[test]
+fn after_a_turn_on_the_spot_the_shift_before_the_next_turn_goes_back_the_way_the_body_came() {
+    let mut h = ready_with(fake::test_config());
+    // east into the next cell, then a turn to face south
+    h.robot.distance_cm = 80.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no FORWARD");
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 2), "no turn");
+    // a wall 19 cm south of the centre, inside the 19.7 cm turning circle: the FORWARD is
+    // refused, the RIGHT must shift first. Backing off (north) 2 cm would clear it, but north of
+    // the body no reading ever looked; 6 cm west, back along the row it drove, clears it too
+    blocked_forward(&mut h, 6.0);
+    let (x0, y0) = (h.robot.x, h.robot.y);
+    h.send(cartography(Command::Right));
+    let (mut north, mut west) = (f64::MIN, f64::MIN);
+    for _ in 0..12_000 {
+        (north, west) = (north.max(h.robot.y - y0), west.max(x0 - h.robot.x));
+        h.run_ms(1);
+        if h.move_done_count() == 4 {
+            break;
+        }
+    }
+    assert_eq!(h.move_done_count(), 4, "no MOVE_DONE for the second RIGHT");
+    assert_eq!(h.carto.stats().turns_shifted, 1, "{:?}", h.carto.stats());
+    // north of the body, behind its new heading, no reading ever looked: it stays where it was;
+    // west, along the row it drove, it shifts until the circle clears the wall
+    assert!(north <= 0.005, "shifted {north:.3} m north, behind the heading it turned to");
+    assert!(west >= 0.05, "shifted only {west:.3} m west, the way it came");
+}
+
+#[test]
 fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows() {
     // a 5 cm clearance, so that the surface bars a good part of the way back, and 0.45 m cells,
     // so that a shift may reach 11 cm
@@ -124,6 +156,34 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
 }
 
 #[test]
+fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
+    // cell (5, 5) facing east, 0.30 m cells: a known point 25 cm ahead and 13.5 cm left of the
+    // centre line, 5 mm inside the 14 cm half corridor (body 12 cm and 2 cm of clearance)
+    let forward = |stop_within_m: f64| {
+        let mut h = ready_with(CartoConfig { stop_within_m, ..fake::test_config() });
+        h.robot.distance_cm = -1.0;
+        h.run_ms(150);
+        h.carto.add_known_surfaces([(5.0 * 0.30 + 0.25, -5.0 * 0.30 + 0.135)]);
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+        h
+    };
+    // with 2 cm allowed off the centre (1 cm once the lateral tolerance is taken off), the
+    // track 7.5 mm right of the line clears the point: the robot drives and ends on it
+    let h = forward(0.02);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let stats = h.carto.stats();
+    assert_eq!((stats.forwards_aside, stats.corridor_blocked), (1, 0));
+    assert!((h.robot.x - 0.30).abs() <= 0.015, "drove {:.3} m", h.robot.x);
+    assert!((-0.0175..=0.0).contains(&h.robot.y), "ended {:.4} m left of the line", h.robot.y);
+    // with no room off the centre it is refused, as before
+    let h = forward(0.01);
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().corridor_blocked, 1);
+    assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
+}
+
+#[test]
 fn the_scan_drives_when_the_path_is_clear() {
     let mut h = ready_with(CartoConfig { scan_deg: 30.0, ..fake::test_config() });
     h.robot.distance_cm = 80.0;
@@ -138,72 +198,42 @@ fn the_scan_drives_when_the_path_is_clear() {
     assert!((h.distance_from(0.0, 0.0) - 0.30).abs() <= 0.015);
 }
 
-/// Two FORWARDs east, the range ahead 100 cm before the first and `cm_after` before the second;
-/// where the first ended and how far the second drove.
-fn two_forwards_with_ranges(cm_after: f32) -> (f64, f64) {
+/// FORWARDs east with the range ahead before each read off a wall `wall_m` east of the start
+/// (the sonar sits 13 cm ahead of the centre), plus `error_cm[i]` before FORWARD `i`; how far
+/// each FORWARD drove, and how many readings corrected the belief.
+fn forwards_towards_a_wall(wall_m: f64, error_cm: &[f32]) -> (Vec<f64>, u64) {
     let mut h = ready_with(fake::test_config());
-    h.robot.distance_cm = 100.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 1));
-    let x1 = h.robot.x;
-    h.robot.distance_cm = cm_after;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(8000, |h| h.move_done_count() == 2));
-    (x1, h.robot.x - x1)
-}
-
-#[test]
-fn the_range_ahead_corrects_the_position_along_the_track() {
-    // the wheels say one cell (30 cm); the wall ahead came 34 cm closer: the robot went 4 cm
-    // further than it believes (slip). Gain σw²/(σw² + 2σs²) with σw = 3 mm (1 %/m over 0.30 m)
-    // and σs = 3 mm: 1/3 of it comes off the next FORWARD
-    let (x1, second) = two_forwards_with_ranges(66.0);
-    let gain = 0.003f64.powi(2) / (0.003f64.powi(2) + 2.0 * 0.003f64.powi(2));
-    let expected = 0.30 - (x1 - 0.30) - gain * (0.34 - x1);
-    assert!((second - expected).abs() <= 0.01, "second FORWARD drove {second:.4} m, expected {expected:.4}");
-    assert!(second < 0.295 - (x1 - 0.30), "no correction: drove {second:.4} m");
-}
-
-#[test]
-fn a_range_that_disagrees_too_much_is_another_object_and_is_ignored() {
-    // 50 cm closer after a 30 cm move: not the same wall
-    let (x1, second) = two_forwards_with_ranges(50.0);
-    assert!((second - (0.30 - (x1 - 0.30))).abs() <= 0.01, "drove {second:.4} m");
-}
-
-/// Three FORWARDs east with the range ahead before each (`None`: no echo); how far the third
-/// drove and how many wall fixes Carto made.
-fn three_forwards(cfg: CartoConfig, ranges: [Option<f32>; 3]) -> (f64, u64) {
-    let mut h = ready_with(cfg);
-    let mut start = 0.0;
-    for (i, cm) in ranges.into_iter().enumerate() {
-        h.robot.distance_cm = cm.unwrap_or(-1.0);
+    let mut driven = Vec::new();
+    for (i, e) in error_cm.iter().enumerate() {
+        h.robot.distance_cm = ((wall_m - h.robot.x - 0.13) * 100.0) as f32 + e;
         h.run_ms(150);
-        start = h.robot.x;
+        let start = h.robot.x;
         h.send(cartography(Command::Forward));
         assert!(h.run_until(8000, |h| h.move_done_count() == i + 1), "FORWARD {i}");
+        driven.push(h.robot.x - start);
     }
-    (h.robot.x - start, h.carto.stats().wall_fixes)
+    (driven, h.carto.stats().pose_fixes)
 }
 
 #[test]
-fn a_wall_seen_before_fixes_the_position_after_a_reading_without_echo() {
-    // The wall reads 95 cm from the start cell; no echo from the next cell (the relative fix
-    // has no pair); from the third cell it reads 32.5 cm where 35 were due: the robot is 2.5 cm
-    // further along than it believes, and only the wall seen two cells back can tell.
-    let ranges = [Some(95.0), None, Some(32.5)];
-    let (with_fix, fixes) = three_forwards(fake::test_config(), ranges);
-    let off = CartoConfig { wall_fix: false, ..fake::test_config() };
-    let (without, none) = three_forwards(off, ranges);
-    assert_eq!((fixes, none), (1, 0));
-    // gain σw²/(σw² + 2σs²) = 1/3 at 0.30 m cells: the third FORWARD drives 0.8 cm less
-    let gain = 1.0 / 3.0;
-    assert!(
-        (without - with_fix - gain * 0.025).abs() <= 0.003,
-        "third FORWARD: {with_fix:.4} m with the wall fix, {without:.4} m without"
-    );
+fn the_range_ahead_corrects_the_belief_against_the_wall_heard_before() {
+    // the wall is heard from the first three cells; before the fourth FORWARD it reads 1 cm
+    // short: the robot is further along than it believes, and that FORWARD drives less (the
+    // filter weighs the wheels, 1 % of the distance, against two readings in whole centimetres)
+    let (agree, fixes_agree) = forwards_towards_a_wall(1.60, &[0.0; 4]);
+    let (short, fixes) = forwards_towards_a_wall(1.60, &[0.0, 0.0, 0.0, -1.0]);
+    let less = agree[3] - short[3];
+    assert!((0.001..=0.01).contains(&less), "the fourth FORWARD drove {less:.4} m less: {agree:?} {short:?}");
+    assert_eq!((fixes_agree, fixes), (3, 3), "every reading after the first corrects");
+    assert!((agree[0] - short[0]).abs() < 1e-9 && (agree[2] - short[2]).abs() < 1e-9);
+}
+
+#[test]
+fn a_range_far_from_the_mapped_wall_is_another_object_and_is_ignored() {
+    // 12 cm short: a chair, not the wall; the belief stays where the wheels put it
+    let (agree, _) = forwards_towards_a_wall(1.60, &[0.0; 4]);
+    let (chair, _) = forwards_towards_a_wall(1.60, &[0.0, 0.0, 0.0, -12.0]);
+    assert!((agree[3] - chair[3]).abs() <= 0.003, "{agree:?} {chair:?}");
 }
 
 /// Sends the turn `turn` from EAST (`Right` to SOUTH, `Left` to NORTH) with the sonar reading
@@ -285,8 +315,9 @@ fn a_reading_in_a_turn_is_kept_on_the_edge_of_the_cone_away_from_the_path() {
     let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
     assert_eq!(seen, DROVE_SOUTH);
-    // with a cone of no width the edge is the central ray, and the same reading blocks
-    let narrow = CartoConfig { sonar_cone_deg: 0.0, ..fake::test_config() };
+    // with a cone of no width the edge is the central ray, and the same reading blocks (with no
+    // room to drive on a track aside: 13 cm beside the path, it would clear the point)
+    let narrow = CartoConfig { sonar_cone_deg: 0.0, stop_within_m: 0.01, ..fake::test_config() };
     let (seen, kept) = forward_after_a_turn(narrow, Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
     assert_eq!(seen, BLOCKED_SOUTH);

@@ -6,7 +6,10 @@
 //! - [`sonar`]: how one sonar reading, echo or silence, changes the grid.
 //! - [`pose`]: an extended Kalman filter over position, heading and gyro bias, predicting from
 //!   the wheels and the gyro and correcting from sonar ranges against the grid.
+//! - [`localiser`]: Carto's belief: the filter run on the dead reckoning, corrected at every
+//!   reading at rest, and the grid those readings build.
 
 pub mod grid;
+pub mod localiser;
 pub mod pose;
 pub mod sonar;

@@ -20,6 +20,9 @@
 //!   A range more than [`GATE_SIGMAS`] standard deviations from the expected one is rejected
 //!   (another object, or an echo from the cone's edge), and so is a surface met at a grazing
 //!   angle (the echo would be lost: [`MAX_INCIDENCE_DEG`]).
+//! - **Correct against an earlier pose** ([`PoseFilter::correct_position_since`]): a range to a
+//!   surface placed from an earlier pose measures the motion since then, not the position; only
+//!   the variance added since is corrected (stochastic cloning, the correlation taken whole).
 //! - **Widen** ([`PoseFilter::widen`]) after a touch, a push or a stall: the body moved in a way
 //!   the wheels did not see.
 //!
@@ -39,7 +42,7 @@
 
 use nalgebra::{Matrix4, RowVector4, Vector4};
 
-use super::grid::{EvidenceGrid, Occupancy};
+use super::grid::EvidenceGrid;
 use crate::surroundings::Pose2;
 
 /// A range further from the expected one than this many standard deviations is rejected.
@@ -48,6 +51,16 @@ pub const GATE_SIGMAS: f64 = 3.0;
 /// loses echoes past about 22.5° (the default profile's incidence limit); 60° keeps the ones
 /// whose expected range is still well defined.
 pub const MAX_INCIDENCE_DEG: f64 = 60.0;
+
+/// A cell at or above this evidence is a surface the filter expects echoes from, log-odds
+/// (p 0.62): two readings that agree on it. Lower than the grid's "occupied" (which the safety
+/// checks act on): a range compared with a surface that is not there is gated out, while a
+/// surface heard from afar takes several readings to reach "occupied".
+pub const SURFACE_LOG_ODDS: f64 = 0.85;
+
+/// A run of occupied cells along a ray deeper than this is taken as this deep (a thick piece
+/// of furniture): the surface is at the middle of at most this much, metres.
+pub const MAX_SURFACE_DEPTH_M: f64 = 0.06;
 
 /// The standard deviation of the gyro bias before anything is learnt of it, degrees per second.
 pub const INITIAL_BIAS_SIGMA_DEG_PER_S: f64 = 0.05;
@@ -211,7 +224,8 @@ impl PoseFilter {
     }
 
     /// Corrects the estimate from the sonar's range `range_m` (σ `sigma_m`), the sonar mounted
-    /// `mount_m` ahead of the body's centre on its axis, against `grid` (see the module docs).
+    /// `mount_m` ahead of the body's centre on its axis, against `grid`, looking along the axis
+    /// only (see the module docs).
     pub fn correct_range(
         &mut self,
         grid: &EvidenceGrid,
@@ -219,28 +233,104 @@ impl PoseFilter {
         range_m: f64,
         sigma_m: f64,
     ) -> RangeUpdate {
+        let axis = Fan { ray_offsets_deg: &[0.0], incidence_limit_deg: MAX_INCIDENCE_DEG };
+        self.correct_echo(grid, mount_m, &axis, range_m, sigma_m)
+    }
+
+    /// Corrects the estimate from an echo at `range_m` (σ `sigma_m`) of a sonar mounted `mount_m`
+    /// ahead of the body's centre, whose cone `fan` samples: the expected range is the nearest
+    /// surface any ray of the fan meets within the incidence limit, as the sonar hears the
+    /// nearest audible echo in its cone; the derivatives are those of that ray.
+    pub fn correct_echo(
+        &mut self,
+        grid: &EvidenceGrid,
+        mount_m: f64,
+        fan: &Fan,
+        range_m: f64,
+        sigma_m: f64,
+    ) -> RangeUpdate {
         let theta = self.state[2];
-        let u = (theta.cos(), theta.sin());
-        let sensor = (self.state[0] + mount_m * u.0, self.state[1] + mount_m * u.1);
+        let axis = (theta.cos(), theta.sin());
+        let sensor = (self.state[0] + mount_m * axis.0, self.state[1] + mount_m * axis.1);
         let max_m = range_m + GATE_SIGMAS * (sigma_m + self.sigma_along(theta.to_degrees())) + 0.1;
-        let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else {
+        let cos_limit = fan.incidence_limit_deg.min(MAX_INCIDENCE_DEG).to_radians().cos();
+        let mut nearest: Option<(f64, (f64, f64), (f64, f64), f64)> = None;
+        for offset in fan.ray_offsets_deg {
+            let ray = theta + offset.to_radians();
+            let u = (ray.cos(), ray.sin());
+            let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else { continue };
+            if nearest.is_some_and(|(d, ..)| d <= expected) {
+                continue;
+            }
+            let normal = surface_normal(grid, hit, u);
+            let facing = -(normal.0 * u.0 + normal.1 * u.1); // cos of the incidence
+            if facing >= cos_limit {
+                nearest = Some((expected, u, normal, facing));
+            }
+        }
+        let Some((expected, u, normal, facing)) = nearest else {
             return RangeUpdate::NoSurface;
         };
-        let normal = surface_normal(grid, hit, u);
-        let facing = -(normal.0 * u.0 + normal.1 * u.1); // cos of the incidence
-        if facing < MAX_INCIDENCE_DEG.to_radians().cos() {
-            return RangeUpdate::NoSurface;
-        }
-        // r = n·(p0 − s)/(n·u) with s = (x, y) + m·u: the derivatives for a plane through the hit
-        let perp = (-u.1, u.0);
-        let n_perp = normal.0 * perp.0 + normal.1 * perp.1;
+        // r = n·(p0 − s)/(n·u) with s = (x, y) + m·axis: the derivatives for a plane through the
+        // hit; turning the body turns both the mount and the ray
+        let n_perp = |v: (f64, f64)| normal.0 * -v.1 + normal.1 * v.0;
         let h = RowVector4::new(
             normal.0 / facing,
             normal.1 / facing,
-            (expected + mount_m) * n_perp / facing,
+            (mount_m * n_perp(axis) + expected * n_perp(u)) / facing,
             0.0,
         );
-        let innovation = range_m - expected;
+        self.update(h, range_m - expected, sigma_m)
+    }
+
+    /// Corrects the estimate from a measurement of the position along the unit vector `u` that
+    /// was made *relative to an earlier pose*: `measured_m` is the depth of a surface placed from
+    /// that pose (whose position along `u` then had variance `earlier_var_m2`), less the range to
+    /// it now, with standard deviation `sigma_m` (the two readings' noise).
+    ///
+    /// The surface's depth carries the earlier pose's error, and so does the estimate now: only
+    /// the variance added since (the motion, a touch) is seen by this measurement, the rest
+    /// cancels. This is the update of stochastic cloning (the earlier pose kept as a state,
+    /// correlated with the current one) with the correlation taken as all of the earlier
+    /// variance: the gain along `u` is `added / (added + σ²)` with `added` the along-`u`
+    /// variance now less `earlier_var_m2`, and the variance left along `u` never falls below
+    /// the earlier one. Treated as an absolute position instead, every fix would count the
+    /// earlier uncertainty as news and pull the belief by too much. Gated on the same
+    /// innovation variance.
+    pub fn correct_position_since(
+        &mut self,
+        u: (f64, f64),
+        measured_m: f64,
+        sigma_m: f64,
+        earlier_var_m2: f64,
+    ) -> RangeUpdate {
+        let h = RowVector4::new(u.0, u.1, 0.0, 0.0);
+        let innovation = measured_m - (u.0 * self.state[0] + u.1 * self.state[1]);
+        let now_var = self.variance_along(u);
+        let added = (now_var - earlier_var_m2.max(0.0)).max(0.0);
+        let s = added + sigma_m.powi(2);
+        if s <= 0.0 || now_var <= 0.0 {
+            return RangeUpdate::NoSurface;
+        }
+        let sigmas = innovation.abs() / s.sqrt();
+        if sigmas > GATE_SIGMAS {
+            return RangeUpdate::Rejected { sigmas };
+        }
+        let k = self.cov * h.transpose() * (added / now_var) / s;
+        self.state += k * innovation;
+        self.cov -= k * k.transpose() * s;
+        self.cov = 0.5 * (self.cov + self.cov.transpose());
+        RangeUpdate::Applied { innovation }
+    }
+
+    /// The variance of the position along the unit vector `u`, square metres.
+    pub fn variance_along(&self, u: (f64, f64)) -> f64 {
+        let p = &self.cov;
+        (u.0 * u.0 * p[(0, 0)] + 2.0 * u.0 * u.1 * p[(0, 1)] + u.1 * u.1 * p[(1, 1)]).max(0.0)
+    }
+
+    /// The Kalman update with measurement row `h` and `innovation`, gated at [`GATE_SIGMAS`].
+    fn update(&mut self, h: RowVector4<f64>, innovation: f64, sigma_m: f64) -> RangeUpdate {
         let s = (h * self.cov * h.transpose())[(0, 0)] + sigma_m.powi(2);
         let sigmas = innovation.abs() / s.sqrt();
         if sigmas > GATE_SIGMAS {
@@ -253,10 +343,40 @@ impl PoseFilter {
         self.cov = i_kh * self.cov * i_kh.transpose() + k * k.transpose() * sigma_m.powi(2);
         RangeUpdate::Applied { innovation }
     }
+
+    /// Takes the heading from outside: `yaw_deg` known to `sigma_deg`, uncorrelated with the
+    /// position and the bias (Carto's heading is the IMU's, its drift tracked elsewhere).
+    pub fn set_heading(&mut self, yaw_deg: f64, sigma_deg: f64) {
+        self.state[2] = yaw_deg.to_radians();
+        for k in 0..4 {
+            self.cov[(2, k)] = 0.0;
+            self.cov[(k, 2)] = 0.0;
+        }
+        self.cov[(2, 2)] = sigma_deg.to_radians().powi(2);
+    }
+
+    /// Moves the mean to `pose` and keeps the covariance and the bias: the caller's dead
+    /// reckoning, which already holds every correction made, is the mean between corrections.
+    pub fn set_mean(&mut self, pose: Pose2) {
+        self.state[0] = pose.x;
+        self.state[1] = pose.y;
+        self.state[2] = pose.yaw_deg.to_radians();
+    }
 }
 
-/// The distance along `u` from `from` to the first occupied cell, within `max_m`, and that
-/// cell's centre; marched in quarter cells.
+/// The rays that sample a sonar's cone and the incidence past which a surface is silent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fan<'a> {
+    /// Each ray's angle from the sonar's axis, counter-clockwise degrees.
+    pub ray_offsets_deg: &'a [f64],
+    /// A surface met further than this from head-on returns no echo, degrees.
+    pub incidence_limit_deg: f64,
+}
+
+/// The distance along `u` from `from` to the first surface within `max_m`, and a point on it:
+/// the middle of the first run of occupied cells the ray crosses (a wall's cells, or the band
+/// an echo marked), so that a surface seen from where it was mapped is expected where it was
+/// heard, not a half band short. Marched in quarter cells.
 fn first_occupied(
     grid: &EvidenceGrid,
     from: (f64, f64),
@@ -264,19 +384,24 @@ fn first_occupied(
     max_m: f64,
 ) -> Option<(f64, (f64, f64))> {
     let step = grid.params().resolution_m / 4.0;
-    let mut last = None;
+    let at = |d: f64| (from.0 + d * u.0, from.1 + d * u.1);
+    let occupied = |d: f64| {
+        let p = at(d);
+        grid.log_odds(grid.cell_of(p.0, p.1)) >= SURFACE_LOG_ODDS
+    };
     let mut d = 0.0;
-    while d <= max_m {
-        let c = grid.cell_of(from.0 + d * u.0, from.1 + d * u.1);
-        if last != Some(c) {
-            last = Some(c);
-            if grid.cell(c) == Occupancy::Occupied {
-                return Some((d, grid.centre(c)));
-            }
-        }
+    while d <= max_m && !occupied(d) {
         d += step;
     }
-    None
+    if d > max_m {
+        return None;
+    }
+    let entry = d;
+    while d - entry < MAX_SURFACE_DEPTH_M && occupied(d + step) {
+        d += step;
+    }
+    let middle = 0.5 * (entry + d);
+    Some((middle, at(middle)))
 }
 
 /// The unit normal of the surface at `hit`, facing against `u`: across the principal axis of the
@@ -285,7 +410,7 @@ fn surface_normal(grid: &EvidenceGrid, hit: (f64, f64), u: (f64, f64)) -> (f64, 
     let pts: Vec<(f64, f64)> = grid
         .cells_in_circle(hit, 3.0 * grid.params().resolution_m)
         .into_iter()
-        .filter(|&c| grid.cell(c) == Occupancy::Occupied)
+        .filter(|&c| grid.log_odds(c) >= SURFACE_LOG_ODDS)
         .map(|c| grid.centre(c))
         .collect();
     if pts.len() < 3 {
@@ -386,6 +511,35 @@ mod tests {
         g.state[1] = 0.9;
         g.state[2] = 10f64.to_radians();
         assert_eq!(g.correct_range(&walls(), 0.13, 1.0, 0.005), RangeUpdate::NoSurface);
+    }
+
+    #[test]
+    fn a_fix_against_an_earlier_pose_corrects_only_what_was_added_since() {
+        let east = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        // 3 cm of uncertainty already when the surface was placed, 0.5 cm added by one cell
+        let mut f = PoseFilter::new(east, 0.03, 0.5);
+        let earlier = f.variance_along((1.0, 0.0));
+        f.predict(0.45, 0.0, 0.0, 1.5, &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() });
+        let added = f.variance_along((1.0, 0.0)) - earlier;
+        // the surface says the body is 1 cm further than the wheels; the readings' σ is 5 mm
+        let update = f.correct_position_since((1.0, 0.0), 0.46, 0.005, earlier);
+        assert!(matches!(update, RangeUpdate::Applied { .. }), "{update:?}");
+        let gain = added / (added + 0.005f64.powi(2));
+        assert!((f.mean().x - (0.45 + gain * 0.01)).abs() < 1e-6, "{} vs gain {gain}", f.mean().x);
+        // what was known before the motion is not learnt again
+        assert!(f.variance_along((1.0, 0.0)) >= earlier, "{} < {earlier}", f.variance_along((1.0, 0.0)));
+        // the same innovation, taken as an absolute position with the same noise, moves it more
+        let mut absolute = PoseFilter::new(east, 0.03, 0.5);
+        absolute.predict(0.45, 0.0, 0.0, 1.5, &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() });
+        absolute.correct_position_since((1.0, 0.0), 0.46, 0.005, 0.0);
+        assert!(absolute.mean().x - 0.45 > 1.5 * (f.mean().x - 0.45));
+        // nothing added since: nothing to correct, and 5 σ off is another surface
+        let still = f.clone();
+        let now = f.variance_along((1.0, 0.0));
+        let one_sigma_on = f.mean().x + 0.005;
+        assert!(matches!(f.correct_position_since((1.0, 0.0), one_sigma_on, 0.005, now), RangeUpdate::Applied { .. }));
+        assert_eq!(f.mean(), still.mean());
+        assert!(matches!(f.correct_position_since((1.0, 0.0), 0.60, 0.005, 0.0), RangeUpdate::Rejected { .. }));
     }
 
     #[test]

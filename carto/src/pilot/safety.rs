@@ -10,15 +10,26 @@
 //! - **Corridor.** The FORWARD runs only if no echo point lies in the rectangle the body sweeps:
 //!   as wide as the body plus [`CartoConfig::clearance_m`] either side, from the front face to the
 //!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
-//!   threshold does). Otherwise Carto answers
-//!   `SET_OBSTACLE_POSITION` for the cell ahead, as for a close straight echo.
+//!   threshold does). When an echo point lies in it, the FORWARD may run on a track beside the
+//!   line through the centres, up to [`CartoConfig::stop_within_m`] less
+//!   [`CartoConfig::lateral_tolerance_m`] from it (the move ends within that tolerance of its
+//!   track), in steps of [`ASIDE_STEP_M`], nearest first: the corridor along that track must hold
+//!   no point (the mecanum wheels strafe to it while driving; the body's own footprint is free).
+//!   The reason: a passage that leaves the body less than the clearance at the centre, but
+//!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
+//!   the robot that came through it one way was refused the way back, a trap Cute could not
+//!   leave. When no track clears, Carto answers `SET_OBSTACLE_POSITION` for the cell ahead, as
+//!   for a close straight echo.
 //! - **Footprint.** Before every reading at rest and every turn check, the points inside the
 //!   body's rectangle where Carto believes it stands are forgotten, the echoes heard moving
 //!   (below) too ([`crate::surroundings::Surroundings::clear_footprint`]).
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
 //!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
 //!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
-//!   most a quarter cell) after which the circle is clear; when none is, it refuses the turn:
+//!   most a quarter cell) after which the circle is clear. "Its heading" is the heading of the
+//!   last FORWARD, not the one the body faces: back along it is the way the body came (space it
+//!   swept), ahead is where it ranged; after a turn on the spot, behind the new heading is space
+//!   no reading covered, and a shift there met walls never heard; when none is, it refuses the turn:
 //!   the reason is logged and the command answered with `MOVE_DONE` only — the link protocol has
 //!   no message that could carry the reason, so Cute takes the turn as done (a known limit,
 //!   `docs/explanation/carto-design.md`). A shift that ends outside its tolerance is checked again from
@@ -35,19 +46,13 @@
 //!   the `MOVE_DONE`, takes the turn back in Carto's belief (Cute never heard of it), and the
 //!   next move faces the old heading first, as after a turn cut in the middle.
 //!
-//! - **Along-track fix.** Two straight readings at rest, before and after one successful FORWARD
-//!   along the same heading, both with an echo closer than [`ALONG_FIX_MAX_M`], say how far the
-//!   robot really went (the difference of the ranges, if both come from the same wall). When the
-//!   wheels disagree by less than [`ALONG_FIX_MAX_ERROR_M`] (more means another object answered),
-//!   the difference corrects the odometry's position along the track, weighted as a Kalman
-//!   update would: gain = σw² / (σw² + 2σs²), with σw the wheels' error over one cell
-//!   ([`CartoConfig::odometry_sigma_per_m`]) and σs one reading's ([`CartoConfig::sonar_sigma_m`]).
-//!   With the default robot (σs 3 mm, σw 4.5 mm per 0.45 m cell) the gain is 0.53; with a 2 cm
-//!   sonar it is 0.03. Wheel slip and the stop error then do not add up over a row.
-//! - **Wall fix.** A straight reading closer than [`WALL_FIX_MAX_M`] that matches a surface seen
-//!   before from the same row or column ([`crate::walls`]) corrects the position along the track
-//!   absolutely, with the same gain, instead of the relative fix: drift that built up over a long
-//!   mission is removed too ([`CartoConfig::wall_fix`]).
+//! - **Belief.** Every straight reading at rest goes to the localiser
+//!   ([`crate::estimate::localiser`]): the pose filter, grown by the motion since the last
+//!   reading, corrects the position along the heading from the range to a surface heard before
+//!   from the same row or column, or to the one heard from the cell behind (with a floor plan,
+//!   against the plan in every direction), and the odometry is moved by the correction. A bump,
+//!   a push or a stall widens the belief first, so the gate opens and the next readings weigh
+//!   more than the wheels.
 //!
 //! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
 //!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
@@ -113,6 +118,7 @@ use robot_model::time::Instant;
 
 use super::{DriveReading, Pilot, Stage, TaskKind};
 use crate::CartoConfig;
+use crate::estimate::sonar::Reading;
 use crate::motor::Motor;
 use crate::odometry::CellOffset;
 use crate::sensors::SensorState;
@@ -125,28 +131,22 @@ const SHIFT_STEP_M: f64 = 0.01;
 /// centre, metres: a move ends within 1 cm, a shift is at least 2 cm, and a run's position error
 /// is measured from the centre of the cell Cute believes at every `MOVE_DONE`.
 const RECENTRE_FROM_M: f64 = 0.03;
-/// Echoes further than this are not used for the along-track fix (the cone widens), metres.
-pub const ALONG_FIX_MAX_M: f64 = 2.0;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
 /// degrees: they look beside the path of the FORWARD that may follow.
 pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// A look past a turn keeps its readings within its own angle plus this, degrees (the look may
 /// overshoot a little before it settles).
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
+/// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
+const ASIDE_STEP_M: f64 = 0.0025;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
 const FAR_SIGMAS: f64 = 3.0;
-/// A larger disagreement between sonar and wheels means two different objects answered, metres.
-pub const ALONG_FIX_MAX_ERROR_M: f64 = 0.05;
-/// Echoes further than this are not kept as walls nor matched with them, metres (the cone is
-/// then at most 26 cm wide, about the body's width).
-pub const WALL_FIX_MAX_M: f64 = 1.0;
 
-/// A straight reading at rest, remembered for the along-track fix.
+/// A straight reading at rest, remembered as the stall watch's first echo.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Straight {
     pose: GridPose,
     range_m: f64,
-    along_m: f64,
 }
 
 /// The geometry the checks need, from [`CartoConfig`].
@@ -154,10 +154,6 @@ pub(super) struct Straight {
 pub(super) struct Safety {
     scan_deg: f64,
     cell_m: f64,
-    /// Kalman gain of the along-track fix (0: off).
-    along_fix_gain: f64,
-    /// Also fix against the walls seen before.
-    wall_fix: bool,
     mount_m: f64,
     half_cone_deg: f64,
     max_range_m: f64,
@@ -181,6 +177,9 @@ pub(super) struct Safety {
     sonar_sigma_m: f64,
     /// [`CartoConfig::drive_timing_m`].
     drive_timing_m: f64,
+    /// How far beside the line through the centres a FORWARD's track may lie, metres
+    /// ([`CartoConfig::stop_within_m`] less the lateral tolerance it ends within).
+    aside_max_m: f64,
 }
 
 impl Safety {
@@ -188,14 +187,6 @@ impl Safety {
         Safety {
             scan_deg: cfg.scan_deg.abs(),
             cell_m: cfg.cell_size_m,
-            along_fix_gain: if cfg.along_fix {
-                let wheels = (cfg.odometry_sigma_per_m * cfg.cell_size_m).powi(2);
-                let sonar = 2.0 * cfg.sonar_sigma_m.powi(2);
-                if wheels + sonar > 0.0 { wheels / (wheels + sonar) } else { 0.0 }
-            } else {
-                0.0
-            },
-            wall_fix: cfg.wall_fix,
             mount_m: cfg.sonar_mount_m,
             half_cone_deg: 0.5 * cfg.sonar_cone_deg,
             max_range_m: cfg.sonar_max_m,
@@ -211,6 +202,7 @@ impl Safety {
             sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
             sonar_sigma_m: cfg.sonar_sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
+            aside_max_m: (cfg.stop_within_m - cfg.lateral_tolerance_m).max(0.0),
         }
     }
 
@@ -262,45 +254,31 @@ impl Pilot {
         Some(Pose2 { x, y, yaw_deg: nominal + turned })
     }
 
-    /// The along-track fix (module docs) from the straight reading `cm` taken at rest now; the
-    /// reading is remembered for the next one.
-    pub(super) fn along_fix(&mut self, cm: Option<f32>, motor: &mut Motor) {
-        let (Some(pose), Some(cm)) = (self.pose, cm) else {
+    /// Corrects the belief from the straight reading `cm` taken at rest now (module docs,
+    /// "Belief"): the localiser's correction moves the odometry, and the reading is remembered
+    /// for the stall watch.
+    pub(super) fn localise(
+        &mut self,
+        now: Instant,
+        cm: Option<f32>,
+        motor: &mut Motor,
+        sensors: &SensorState,
+    ) {
+        let (Some(pose), Some(robot)) = (self.pose, self.believed(motor, sensors)) else {
             self.last_straight = None;
             return;
         };
-        let range_m = f64::from(cm) / 100.0;
-        let along_m = motor.odometry().offset().along_m;
-        let s = self.safety;
-        let usable = s.wall_fix && s.along_fix_gain > 0.0 && range_m <= WALL_FIX_MAX_M;
-        let ahead_m = s.mount_m + range_m;
-        let wall = if usable { self.walls.drift(pose, s.cell_m, along_m, ahead_m) } else { None };
-        let prev = self.last_straight.take();
-        if let Some(drift) = wall {
-            let fix = s.along_fix_gain * drift;
-            tracing::debug!(drift, fix, "along-track fix from a wall seen before");
-            self.counters.wall_fixes += 1;
-            motor.correct_along(fix);
-        } else if let Some(prev) = prev
-            && prev.pose.heading == pose.heading
-            && prev.pose.ahead() == Some((pose.x, pose.y))
-            && prev.range_m <= ALONG_FIX_MAX_M
-        {
-            let by_sonar = prev.range_m - range_m;
-            let by_wheels = s.cell_m + along_m - prev.along_m;
-            let error = by_wheels - by_sonar;
-            if error.abs() <= ALONG_FIX_MAX_ERROR_M {
-                let fix = -s.along_fix_gain * error;
-                tracing::debug!(by_sonar, by_wheels, fix, "along-track fix from the range ahead");
-                motor.correct_along(fix);
-            }
+        let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
+        let (dx, dy) = self.localiser.at_rest(now, pose, robot, reading);
+        if dx != 0.0 || dy != 0.0 {
+            // into the nominal frame the odometry's offset is kept in
+            let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
+            let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
+            tracing::debug!(fix.along_m, fix.left_m, "belief corrected from the range at rest");
+            self.counters.pose_fixes += 1;
+            motor.correct_offset(fix);
         }
-        if usable && wall.is_none() {
-            // a new wall, placed from the position the relative fix has just corrected
-            self.walls.remember(pose, s.cell_m, motor.odometry().offset().along_m, ahead_m);
-        }
-        let along_m = motor.odometry().offset().along_m;
-        self.last_straight = Some(Straight { pose, range_m, along_m });
+        self.last_straight = cm.map(|cm| Straight { pose, range_m: f64::from(cm) / 100.0 });
     }
 
     /// Keeps a reading taken at rest: the echo `cm` from the sonar as a point (`None`: no echo),
@@ -374,6 +352,7 @@ impl Pilot {
         }
         tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
         self.counters.turn_readings += 1;
+        self.localiser.learn(robot, Reading::Echo(range));
         self.keep_on_far_edge(robot, target, range);
     }
 
@@ -586,11 +565,12 @@ impl Pilot {
             return self.fail(now, "scan incomplete: no distance reading at rest");
         }
         let s = self.safety;
+        let mut track_left_m = 0.0;
         if let Some(robot) = self.believed(motor, sensors) {
-            let along = motor.odometry().offset().along_m;
+            let off = motor.odometry().offset();
             // along the track the move stops within its tolerance: the far end is the front face
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
-            let to = s.cell_m - along + s.half_length_m;
+            let to = s.cell_m - off.along_m + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
             let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
             let heard_moving = if known.is_none() {
@@ -598,16 +578,30 @@ impl Pilot {
             } else {
                 None
             };
-            if let Some((a, l)) = heard_moving {
-                // what refused this FORWARD, the turn that may follow keeps clear of too ("Kept
-                // while they hold")
-                self.surroundings.add_point(robot, robot.offset(a, l));
-            }
-            if let Some((a, l)) = known.or(heard_moving) {
-                tracing::info!(along_m = a, left_m = l, "echo in the body's path: no motion");
-                self.counters.corridor_blocked += 1;
-                self.report_obstacle();
-                return self.end_task(now);
+            if let Some(hit) = known.or(heard_moving) {
+                match self.sidestep(robot, off.left_m, to, half) {
+                    Some(track) => {
+                        tracing::info!(
+                            track_left_m = track,
+                            echo_along_m = hit.0,
+                            echo_left_m = hit.1,
+                            "FORWARD on a track aside, clear of an echo beside the path"
+                        );
+                        self.counters.forwards_aside += 1;
+                        track_left_m = track;
+                    }
+                    None => {
+                        if let Some((a, l)) = heard_moving {
+                            // what refused this FORWARD, the turn that may follow keeps clear of
+                            // too ("Kept while they hold")
+                            self.surroundings.add_point(robot, robot.offset(a, l));
+                        }
+                        tracing::info!(along_m = hit.0, left_m = hit.1, "echo in the body's path: no motion");
+                        self.counters.corridor_blocked += 1;
+                        self.report_obstacle();
+                        return self.end_task(now);
+                    }
+                }
             }
         }
         if self.pose.is_none() {
@@ -622,10 +616,30 @@ impl Pilot {
                 watch.push(0.0, straight.range_m);
             }
         }
-        match motor.start_next_cell(now, sensors).map(|_| ()) {
+        match motor.start_next_cell_on(now, track_left_m, sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
             Err(e) => self.fail(now, &e.to_string()),
         }
+    }
+
+    /// The track nearest the line through the cells' centres (that line first), within
+    /// [`Safety::aside_max_m`] of it, along which
+    /// the FORWARD's corridor (`to_m` ahead, `half_m` either side) holds no echo point, from
+    /// `robot`, whose believed position is `left_m` left of the line through the centres
+    /// (module docs, "Corridor"). `None` when no such track clears.
+    fn sidestep(&self, robot: Pose2, left_m: f64, to_m: f64, half_m: f64) -> Option<f64> {
+        let s = self.safety;
+        let steps = (s.aside_max_m / ASIDE_STEP_M).floor() as i32;
+        let tracks = (1..=steps).flat_map(|k| [f64::from(k) * ASIDE_STEP_M, -f64::from(k) * ASIDE_STEP_M]);
+        std::iter::once(0.0).chain(tracks).find(|&track| {
+            // the body strafes from where it stands to the track as it starts: the corridor on
+            // the track is checked from the body's back face, beside it too
+            let (x, y) = robot.offset(0.0, track - left_m);
+            let on_track = Pose2 { x, y, ..robot };
+            [&self.surroundings, &self.edge_echoes]
+                .iter()
+                .all(|points| points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none())
+        })
     }
 
     /// After a shift that did not end within tolerance: the turn runs if the circle is clear from
@@ -672,7 +686,23 @@ impl Pilot {
             return self.start_turn(now, mv, motor, sensors);
         };
         let max_m = 0.25 * s.cell_m;
-        let shift = self.surroundings.clearing_shift(robot, radius, max_m, SHIFT_STEP_M, s.strafe_shifts);
+        // searched in the frame of the last FORWARD's heading: behind is the way the body came
+        // (swept), ahead the way it ranged; after a turn on the spot, behind the new heading is
+        // space no reading covered (module docs, "Turns")
+        let turned_deg = match (self.pose, self.travel) {
+            (Some(pose), Some(travel)) => heading_deg(travel) - heading_deg(pose.heading),
+            _ => 0.0,
+        };
+        let travel_frame = Pose2 { yaw_deg: robot.yaw_deg + turned_deg, ..robot };
+        let shift = self
+            .surroundings
+            .clearing_shift(travel_frame, radius, max_m, SHIFT_STEP_M, s.strafe_shifts)
+            .map(|(along, left)| {
+                // into the body's frame, where the shift is driven
+                let (sin, cos) = turned_deg.to_radians().sin_cos();
+                let round = |v: f64| (v / SHIFT_STEP_M).round() * SHIFT_STEP_M;
+                (round(along * cos - left * sin) + 0.0, round(along * sin + left * cos) + 0.0)
+            });
         match shift {
             Some((metres, left_m)) => {
                 tracing::info!(

@@ -1,0 +1,484 @@
+//! Carto's belief of where the robot is: the pose filter ([`super::pose`]) run on the dead
+//! reckoning and corrected at every straight reading at rest, against the surfaces heard before
+//! (or the floor plan, when one is given).
+//!
+//! Contract:
+//! - **Between corrections the mean is the dead reckoning** the motor controller steers by: the
+//!   stored cell's centre plus the odometry's offset, facing the IMU's heading (the pilot's
+//!   `believed`). At every reading taken at rest, [`Localiser::at_rest`] grows the covariance by
+//!   the motion since the last one (along, across, turned, time), corrects the position, and
+//!   returns the correction; the pilot moves the odometry by it, so the next FORWARD aims at the
+//!   next cell's centre from the corrected position.
+//! - **What a range is compared with.** With a floor plan (the twin's `--known-room`), the
+//!   nearest surface a 7-ray fan across the cone meets within the incidence limit
+//!   ([`PoseFilter::correct_echo`]): the plan is exact, so every direction it has surfaces in
+//!   corrects. Without one, the surfaces heard straight ahead at rest ([`crate::walls`]): a
+//!   surface kept from an echo within [`WALL_MAX_M`] when facing the same heading from the same
+//!   row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
+//!   measurement of the position along the heading with the noise of two readings, *relative to
+//!   the pose the surface was placed from* ([`PoseFilter::correct_position_since`]): the
+//!   surface's depth carries that pose's error, so only the uncertainty added since (the motion,
+//!   a touch) is corrected; taken as absolute positions, the fixes counted the old uncertainty
+//!   again at every reading and pulled the belief too far (`docs/journal/world-model.md`). Why not the
+//!   evidence grid: an echo marks an arc across the cone, and seen from another row its off-axis
+//!   cells lie up to `1 − cos 7.5°` of the range nearer than the surface; ranges compared with
+//!   those arcs pulled the belief away from the walls (`docs/journal/world-model.md`).
+//! - **The gate is the filter's**: a range more than 3 σ of the innovation from the expected one
+//!   is another object. It widens with the belief's uncertainty, so after a touch a range that
+//!   disagrees by centimetres is taken, where a fixed window would refuse it.
+//! - **The heading stays the IMU's.** One range per FORWARD says little of it, and the IMU's
+//!   drift is tracked already (`sensors.rs`). At every reading the filter takes the IMU's heading
+//!   as known to [`IMU_HEADING_SIGMA_DEG`], uncorrelated with the position: left to grow with
+//!   the gyro's noise over a whole mission, the heading's variance would be taken for position
+//!   error through the cross-terms, and one small innovation would move the belief by
+//!   centimetres.
+//! - **The grid** learns from every reading at rest and every reading kept in a turn, placed
+//!   from the corrected pose: the body's footprint certainly free, the reading by the sonar
+//!   model (the map the next steps plan in; nothing reads it yet). A reading from where the
+//!   last one was learnt (the sonar within [`SAME_SPOT_M`] and [`SAME_SPOT_DEG`]) is not learnt
+//!   again: it is the same echo of the same surfaces, not new evidence, and counted again it
+//!   would harden the whole arc of a far echo into a surface. Surfaces known before the run
+//!   are pinned.
+//! - **A touch** (a bump, a push, a stall) widens the position by [`TOUCH_SIGMA_M`] and the
+//!   heading by [`TOUCH_SIGMA_DEG`]: the body moved in a way the wheels did not see, and the next
+//!   readings weigh more than the wheels.
+//! - **A new pose from Cute** starts a new grid, new surfaces and a new filter (their frame is
+//!   the pose's); pinned surfaces are pinned again.
+//!
+//! ```
+//! use carto::CartoConfig;
+//! use carto::estimate::localiser::Localiser;
+//! use carto::estimate::sonar::Reading;
+//! use carto::surroundings::Pose2;
+//! use robot_model::grid::{GridPose, Heading};
+//! use robot_model::time::Instant;
+//! let mut loc = Localiser::new(&CartoConfig::default());
+//! let (east, start) = (Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 }, GridPose { x: 0, y: 0, heading: Heading::East });
+//! // a wall 80 cm ahead of the sonar (13 cm ahead of the centre) is kept as a surface
+//! loc.at_rest(Instant::from_millis(0), start, east, Reading::Echo(0.80));
+//! loc.touched(); // a bump on the way: the wheels are trusted less
+//! // the wheels say one cell (45 cm), the body went 50: the wall reads 30 cm
+//! let next = GridPose { y: 1, ..start };
+//! let fix = loc.at_rest(Instant::from_millis(3000), next, Pose2 { x: 0.45, ..east }, Reading::Echo(0.30));
+//! assert!((fix.0 - 0.05).abs() < 0.01 && fix.1.abs() < 1e-9, "{fix:?}");
+//! ```
+
+use robot_model::time::Instant;
+
+use super::grid::{EvidenceGrid, GridParams};
+use super::pose::{Fan, MotionNoise, PoseFilter, RangeUpdate};
+use super::sonar::{Reading, SonarModel};
+use robot_model::grid::{GridPose, Heading};
+
+use crate::CartoConfig;
+use crate::surroundings::Pose2;
+use crate::walls::{self, Walls};
+
+/// How well Carto knows where it is when Cute names its cell, metres and degrees. The grid is
+/// built in the frame of that pose, so what matters is the error relative to it, which starts
+/// small; a floor plan given before the run (the twin's `--known-room`) is exact.
+pub const START_SIGMA_M: f64 = 0.005;
+/// See [`START_SIGMA_M`].
+pub const START_SIGMA_DEG: f64 = 0.5;
+/// How well the IMU's heading is known at a reading, degrees (its noise and what is left of its
+/// drift after `sensors.rs` has estimated it).
+pub const IMU_HEADING_SIGMA_DEG: f64 = 0.5;
+/// How far a touch may have moved the body unseen, metres (one σ): touches measured in the twin
+/// push the body 4–23 cm.
+pub const TOUCH_SIGMA_M: f64 = 0.05;
+/// How far a touch may have turned the body unseen, degrees (one σ).
+pub const TOUCH_SIGMA_DEG: f64 = 3.0;
+/// A reading taken this close to the last one learnt, metres and degrees, teaches the grid
+/// nothing new (see the module docs).
+pub const SAME_SPOT_M: f64 = 0.02;
+/// See [`SAME_SPOT_M`].
+pub const SAME_SPOT_DEG: f64 = 3.0;
+/// Echoes farther than this are not kept as surfaces nor matched with them, metres: the cone is
+/// then wider than the body, and what answers may be another face than the one kept.
+pub const WALL_MAX_M: f64 = 1.0;
+/// Echoes farther than this are not paired with the reading of the next cell, metres.
+pub const RELATIVE_MAX_M: f64 = 2.0;
+/// Rays that sample the cone for the expected range: the real cone is continuous.
+pub const FAN_RAYS: usize = 7;
+
+/// What the localiser did, for the counters.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LocaliserCounters {
+    /// Ranges that corrected the position.
+    pub applied: u64,
+    /// Ranges too far from the expected range (another object, an echo from the cone's edge).
+    pub rejected: u64,
+    /// Ranges with nothing on the map to compare with.
+    pub unmatched: u64,
+    /// Touches that widened the belief.
+    pub touches: u64,
+}
+
+/// A straight reading at rest: where it was taken, the depth along the heading of the surface it
+/// heard, and the variance of the position along the heading then.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Straight {
+    pose: GridPose,
+    depth_m: f64,
+    placed_var_m2: f64,
+}
+
+/// The belief (see the module docs).
+#[derive(Debug, Clone)]
+pub struct Localiser {
+    grid: EvidenceGrid,
+    sonar: SonarModel,
+    noise: MotionNoise,
+    /// The filter, the pose its mean was last set to, and when.
+    filter: Option<(PoseFilter, Pose2, Instant)>,
+    /// A touch since the last reading, to widen the filter with (or the start, if none yet).
+    touched: bool,
+    known: Vec<(f64, f64)>,
+    /// The surfaces known before the run, pinned, and nothing else: the map a range is compared
+    /// with when there is one.
+    known_grid: Option<EvidenceGrid>,
+    /// Surfaces heard straight ahead at rest, as depths along a grid heading.
+    walls: Walls,
+    /// The last straight reading at rest.
+    last_straight: Option<Straight>,
+    /// Where the sonar was when the grid last learnt a reading, and what it read.
+    last_learnt: Option<(Pose2, Reading)>,
+    fan_deg: Vec<f64>,
+    incidence_limit_deg: f64,
+    mount_m: f64,
+    range_sigma_m: f64,
+    /// The σ of one range against another of the same surface (two readings' noise and steps).
+    pair_sigma_m: f64,
+    half_length_m: f64,
+    half_width_m: f64,
+    counters: LocaliserCounters,
+}
+
+impl Localiser {
+    /// A localiser for the robot `cfg` describes, with an empty grid and no pose yet.
+    pub fn new(cfg: &CartoConfig) -> Self {
+        let params = GridParams::default();
+        let sonar = SonarModel::from_config(cfg);
+        let half_cone = cfg.sonar_cone_deg / 2.0;
+        let fan_deg =
+            (0..FAN_RAYS).map(|k| -half_cone + 2.0 * half_cone * k as f64 / (FAN_RAYS - 1) as f64).collect();
+        // one range against the grid: the sonar's noise, its 1 cm steps and where in its cell
+        // the surface lies (a uniform error over a step has σ = step / √12)
+        let uniform = |step: f64| step / 12f64.sqrt();
+        let range_sigma_m = (cfg.sonar_sigma_m.powi(2)
+            + uniform(sonar.quantisation_m).powi(2)
+            + uniform(params.resolution_m).powi(2))
+        .sqrt();
+        Localiser {
+            grid: EvidenceGrid::new(params),
+            sonar,
+            noise: MotionNoise { along_per_m: cfg.odometry_sigma_per_m, ..MotionNoise::default() },
+            filter: None,
+            touched: false,
+            known: Vec::new(),
+            known_grid: None,
+            walls: Walls::default(),
+            last_straight: None,
+            last_learnt: None,
+            fan_deg,
+            incidence_limit_deg: cfg.sonar_incidence_deg,
+            mount_m: cfg.sonar_mount_m,
+            range_sigma_m,
+            pair_sigma_m: (2.0 * (cfg.sonar_sigma_m.powi(2) + uniform(sonar.quantisation_m).powi(2))).sqrt(),
+            half_length_m: cfg.body_length_m / 2.0,
+            half_width_m: cfg.body_width_m / 2.0,
+            counters: LocaliserCounters::default(),
+        }
+    }
+
+    /// Forgets the grid and the filter (a new pose from Cute: a new frame); pinned surfaces stay.
+    pub fn reset(&mut self) {
+        self.grid = EvidenceGrid::new(*self.grid.params());
+        for &p in &self.known {
+            self.grid.pin_segment(p, p);
+        }
+        self.filter = None;
+        self.touched = false;
+        self.last_learnt = None;
+        self.walls.clear();
+        self.last_straight = None;
+    }
+
+    /// Forgets the last straight reading: the robot was stopped somewhere Carto did not plan.
+    pub fn forget_last_reading(&mut self) {
+        self.last_straight = None;
+    }
+
+    /// Pins surface points known for good, in Carto's frame.
+    pub fn pin(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        let known = self.known_grid.get_or_insert_with(|| EvidenceGrid::new(*self.grid.params()));
+        for p in points {
+            self.grid.pin_segment(p, p);
+            known.pin_segment(p, p);
+            self.known.push(p);
+        }
+    }
+
+    /// A touch: the next reading finds the belief widened (see the module docs).
+    pub fn touched(&mut self) {
+        self.touched = true;
+        self.counters.touches += 1;
+    }
+
+    /// A reading taken at rest at `now` in the stored cell and heading `pose`, the dead
+    /// reckoning saying `believed`: grows the covariance by the motion since the last reading,
+    /// corrects the position from the range and teaches the grid the reading from the corrected
+    /// pose. Returns the correction `(dx, dy)` in Carto's frame, metres (zero when the range
+    /// told nothing).
+    pub fn at_rest(&mut self, now: Instant, pose: GridPose, believed: Pose2, reading: Reading) -> (f64, f64) {
+        let noise = self.noise;
+        let (filter, synced, at) = self.filter.get_or_insert_with(|| {
+            (PoseFilter::new(believed, START_SIGMA_M, START_SIGMA_DEG), believed, now)
+        });
+        let dt = now.saturating_since(*at).as_secs_f64();
+        let mid = (0.5 * (synced.yaw_deg + believed.yaw_deg)).to_radians();
+        let (dx, dy) = (believed.x - synced.x, believed.y - synced.y);
+        let along = dx * mid.cos() + dy * mid.sin();
+        let left = -dx * mid.sin() + dy * mid.cos();
+        filter.predict(along, left, (believed.yaw_deg - synced.yaw_deg).to_radians(), dt, &noise);
+        if core::mem::take(&mut self.touched) {
+            filter.widen(TOUCH_SIGMA_M, TOUCH_SIGMA_DEG);
+        }
+        filter.set_mean(believed);
+        filter.set_heading(believed.yaw_deg, IMU_HEADING_SIGMA_DEG);
+        let u = unit(pose.heading);
+        let Reading::Echo(range) = reading else {
+            self.last_straight = None;
+            return self.finish(now, believed, reading);
+        };
+        let ahead = self.mount_m + range;
+        let lateral = walls::lateral(pose);
+        let mut matched_wall = false;
+        let update = if let Some(known) = &self.known_grid {
+            let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };
+            filter.correct_echo(known, self.mount_m, &fan, range, self.range_sigma_m)
+        } else {
+            let depth = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
+            let mut update = RangeUpdate::NoSurface;
+            if range <= WALL_MAX_M
+                && let Some(wall) = self.walls.nearest(pose.heading, lateral, depth)
+            {
+                let at = wall.depth_m - ahead;
+                update = filter.correct_position_since(u, at, self.pair_sigma_m, wall.placed_var_m2);
+                matched_wall = matches!(update, RangeUpdate::Applied { .. });
+            }
+            if !matched_wall
+                && let Some(prev) = self.last_straight
+                && prev.pose.heading == pose.heading
+                && prev.pose.ahead() == Some((pose.x, pose.y))
+            {
+                let at = prev.depth_m - ahead;
+                update = filter.correct_position_since(u, at, self.pair_sigma_m, prev.placed_var_m2);
+            }
+            update
+        };
+        tracing::debug!(
+            x = believed.x,
+            y = believed.y,
+            yaw = believed.yaw_deg,
+            range,
+            ?update,
+            "range at rest"
+        );
+        match update {
+            RangeUpdate::Applied { .. } => self.counters.applied += 1,
+            RangeUpdate::Rejected { .. } => self.counters.rejected += 1,
+            RangeUpdate::NoSurface => self.counters.unmatched += 1,
+        }
+        let depth_m = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
+        let placed_var_m2 = filter.variance_along(u);
+        if range <= WALL_MAX_M && !matched_wall {
+            self.walls.remember(pose.heading, lateral, depth_m, placed_var_m2);
+        }
+        self.last_straight = (range <= RELATIVE_MAX_M).then_some(Straight { pose, depth_m, placed_var_m2 });
+        self.finish(now, believed, reading)
+    }
+
+    /// Ends a reading at rest: the filter's mean is the corrected pose, facing the IMU's heading;
+    /// the grid learns the reading from there. Returns the correction.
+    fn finish(&mut self, now: Instant, believed: Pose2, reading: Reading) -> (f64, f64) {
+        let Some((filter, synced, at)) = self.filter.as_mut() else { return (0.0, 0.0) };
+        let corrected = Pose2 { yaw_deg: believed.yaw_deg, ..filter.mean() };
+        filter.set_mean(corrected);
+        filter.set_heading(believed.yaw_deg, IMU_HEADING_SIGMA_DEG);
+        (*synced, *at) = (corrected, now);
+        self.learn(corrected, reading);
+        (corrected.x - believed.x, corrected.y - believed.y)
+    }
+
+    /// Teaches the grid a reading taken from the body at `robot` (a reading kept in a turn): the
+    /// footprint free, the reading by the sonar model. The filter is not corrected.
+    pub fn learn(&mut self, robot: Pose2, reading: Reading) {
+        self.grid.set_robot(robot.x, robot.y);
+        self.grid.clear_rect(robot, -self.half_length_m, self.half_length_m, self.half_width_m);
+        let (x, y) = robot.offset(self.mount_m, 0.0);
+        let sonar = Pose2 { x, y, yaw_deg: robot.yaw_deg };
+        let same_spot = self.last_learnt.is_some_and(|(last, heard)| {
+            (last.x - sonar.x).hypot(last.y - sonar.y) <= SAME_SPOT_M
+                && crate::sensors::wrap180(last.yaw_deg - sonar.yaw_deg).abs() <= SAME_SPOT_DEG
+                && same_reading(heard, reading)
+        });
+        if !same_spot {
+            self.sonar.update(&mut self.grid, sonar, reading);
+            self.last_learnt = Some((sonar, reading));
+        }
+    }
+
+    /// The standard deviation of the position, metres (the larger axis); `None` before the first
+    /// reading.
+    pub fn sigma_m(&self) -> Option<f64> {
+        self.filter.as_ref().map(|(f, ..)| {
+            let p = f.covariance();
+            p[(0, 0)].max(p[(1, 1)]).sqrt()
+        })
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &EvidenceGrid {
+        &self.grid
+    }
+
+    /// The counters.
+    pub fn counters(&self) -> LocaliserCounters {
+        self.counters
+    }
+}
+
+/// Whether two readings heard the same thing (the same echo within a range step, or both none).
+fn same_reading(a: Reading, b: Reading) -> bool {
+    match (a, b) {
+        (Reading::Echo(a), Reading::Echo(b)) => (a - b).abs() <= 0.02,
+        (Reading::NoEcho, Reading::NoEcho) => true,
+        _ => false,
+    }
+}
+
+/// The unit vector of a grid heading in Carto's frame (x east, y north).
+fn unit(h: Heading) -> (f64, f64) {
+    match h {
+        Heading::East => (1.0, 0.0),
+        Heading::West => (-1.0, 0.0),
+        Heading::North => (0.0, 1.0),
+        Heading::South => (0.0, -1.0),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ms(v: u64) -> Instant {
+        Instant::from_millis(v)
+    }
+
+    /// Row 5, column `col`, facing east.
+    fn cell(col: u8) -> GridPose {
+        GridPose { x: 5, y: col, heading: Heading::East }
+    }
+
+    fn east(x: f64) -> Pose2 {
+        Pose2 { x, y: 0.0, yaw_deg: 0.0 }
+    }
+
+    #[test]
+    fn a_wall_heard_before_corrects_the_later_readings() {
+        // a wall 1.1 m east: heard from the start (97 cm), then no echo from the next cell
+        let mut loc = Localiser::new(&CartoConfig::default());
+        assert_eq!(loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(0.97)), (0.0, 0.0));
+        assert_eq!(loc.at_rest(ms(2000), cell(1), east(0.45), Reading::NoEcho), (0.0, 0.0));
+        // from the cell after, the wheels say 0.90 m; the body is at 0.92 m (13 cm to the sonar)
+        let (dx, dy) = loc.at_rest(ms(4000), cell(2), east(0.90), Reading::Echo(1.1 - 0.92 - 0.13));
+        // two cells of wheel noise since the wall was placed, against two readings' noise
+        let gain = two_readings_gain(2.0);
+        assert!((dx - 0.02 * gain).abs() < 1e-3 && dy.abs() < 1e-9, "corrected by {dx}, gain {gain}");
+        assert_eq!(loc.counters().applied, 1);
+    }
+
+    #[test]
+    fn two_readings_one_cell_apart_say_how_far_the_robot_went() {
+        // 1.5 m to the wall: too far to keep as a surface, near enough to pair with the next
+        let mut loc = Localiser::new(&CartoConfig::default());
+        loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(1.50));
+        // the wheels say 0.45 m, the range says 0.47 m: one cell of wheel noise is corrected
+        let (dx, _) = loc.at_rest(ms(2000), cell(1), east(0.45), Reading::Echo(1.03));
+        let gain = two_readings_gain(1.0);
+        assert!((dx - 0.02 * gain).abs() < 1e-3, "corrected by {dx}, gain {gain}");
+    }
+
+    /// The gain of a fix against an earlier reading `cells` moves of 0.45 m behind, with the
+    /// default robot: the wheels' variance over those moves (each adds its own) against two
+    /// readings' (noise and 1 cm steps).
+    fn two_readings_gain(cells: f64) -> f64 {
+        let cfg = CartoConfig::default();
+        let wheels = cells * (cfg.odometry_sigma_per_m * 0.45).powi(2);
+        let readings = 2.0 * (cfg.sonar_sigma_m.powi(2) + 0.01f64.powi(2) / 12.0);
+        wheels / (wheels + readings)
+    }
+
+    #[test]
+    fn a_touch_lets_the_next_reading_move_the_belief_further() {
+        let fix = |touch: bool| {
+            let mut loc = Localiser::new(&CartoConfig::default());
+            loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(0.80));
+            if touch {
+                loc.touched();
+            }
+            // the body was pushed 8 cm on unseen
+            loc.at_rest(ms(2000), cell(1), east(0.45), Reading::Echo(0.80 - 0.45 - 0.08)).0
+        };
+        let (plain, touched) = (fix(false), fix(true));
+        assert!((touched - 0.08).abs() < 0.015, "after a touch: {touched}");
+        assert!(plain.abs() < 1e-9, "without a touch 8 cm is another object: {plain}");
+    }
+
+    #[test]
+    fn a_known_room_corrects_every_range_against_its_surfaces() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        loc.pin((-50..=50).map(|k| (1.2, f64::from(k) * 0.01)));
+        loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(1.07));
+        loc.touched();
+        // believed at 0.45, really at 0.50: 1.2 − 0.50 − 0.13
+        let (dx, _) = loc.at_rest(ms(2000), cell(1), east(0.45), Reading::Echo(0.57));
+        assert!((dx - 0.05).abs() < 0.015, "{dx}");
+    }
+
+    #[test]
+    fn an_unknown_echo_or_silence_corrects_nothing_and_a_new_pose_forgets() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        assert_eq!(loc.at_rest(ms(0), cell(0), east(0.0), Reading::NoEcho), (0.0, 0.0));
+        assert_eq!(loc.at_rest(ms(100), cell(0), east(0.0), Reading::Echo(0.5)), (0.0, 0.0));
+        assert!(!loc.grid().written_cells().is_empty());
+        loc.reset();
+        assert!(loc.sigma_m().is_none());
+        assert!(loc.grid().written_cells().is_empty());
+        // the wall heard before the reset is not compared with any more
+        assert_eq!(loc.at_rest(ms(200), cell(0), east(0.0), Reading::Echo(0.45)), (0.0, 0.0));
+    }
+
+    #[test]
+    fn the_same_echo_from_the_same_spot_is_learnt_once() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        loc.learn(east(0.0), Reading::Echo(1.5));
+        let once = loc.grid().written_cells();
+        for _ in 1..10 {
+            loc.learn(east(0.0), Reading::Echo(1.5));
+        }
+        assert_eq!(loc.grid().written_cells(), once, "ten readings from one spot are one reading");
+        loc.learn(Pose2 { y: 0.05, ..east(0.0) }, Reading::Echo(1.5));
+        assert_ne!(loc.grid().written_cells(), once, "a step aside is a new reading");
+    }
+
+    #[test]
+    fn driving_without_readings_grows_the_uncertainty() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        loc.at_rest(ms(0), cell(0), east(0.0), Reading::NoEcho);
+        let first = loc.sigma_m().unwrap_or_default();
+        loc.at_rest(ms(5000), cell(4), east(2.0), Reading::NoEcho);
+        assert!(loc.sigma_m().unwrap_or_default() > first, "{first} -> {:?}", loc.sigma_m());
+    }
+}
