@@ -325,7 +325,12 @@ impl Motor {
     /// [`Motor::start_next_cell`] on a track `track_left_m` left of the line through the cells'
     /// centres: the lateral hold strafes to it while driving, and the move ends on it (within
     /// [`CartoConfig::lateral_tolerance_m`]).
-    pub fn start_next_cell_on(&mut self, now: Instant, track_left_m: f64, s: &SensorState) -> Result<f64, MoveError> {
+    pub fn start_next_cell_on(
+        &mut self,
+        now: Instant,
+        track_left_m: f64,
+        s: &SensorState,
+    ) -> Result<f64, MoveError> {
         self.fresh_counts(now, s)?;
         self.hold_reference(now, s)?;
         let cell = self.cfg.cell_size_m;

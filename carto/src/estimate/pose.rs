@@ -530,16 +530,28 @@ mod tests {
         assert!(f.variance_along((1.0, 0.0)) >= earlier, "{} < {earlier}", f.variance_along((1.0, 0.0)));
         // the same innovation, taken as an absolute position with the same noise, moves it more
         let mut absolute = PoseFilter::new(east, 0.03, 0.5);
-        absolute.predict(0.45, 0.0, 0.0, 1.5, &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() });
+        absolute.predict(
+            0.45,
+            0.0,
+            0.0,
+            1.5,
+            &MotionNoise { along_per_m: 0.005 / 0.45, ..MotionNoise::default() },
+        );
         absolute.correct_position_since((1.0, 0.0), 0.46, 0.005, 0.0);
         assert!(absolute.mean().x - 0.45 > 1.5 * (f.mean().x - 0.45));
         // nothing added since: nothing to correct, and 5 σ off is another surface
         let still = f.clone();
         let now = f.variance_along((1.0, 0.0));
         let one_sigma_on = f.mean().x + 0.005;
-        assert!(matches!(f.correct_position_since((1.0, 0.0), one_sigma_on, 0.005, now), RangeUpdate::Applied { .. }));
+        assert!(matches!(
+            f.correct_position_since((1.0, 0.0), one_sigma_on, 0.005, now),
+            RangeUpdate::Applied { .. }
+        ));
         assert_eq!(f.mean(), still.mean());
-        assert!(matches!(f.correct_position_since((1.0, 0.0), 0.60, 0.005, 0.0), RangeUpdate::Rejected { .. }));
+        assert!(matches!(
+            f.correct_position_since((1.0, 0.0), 0.60, 0.005, 0.0),
+            RangeUpdate::Rejected { .. }
+        ));
     }
 
     #[test]
