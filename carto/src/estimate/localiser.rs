@@ -358,14 +358,11 @@ fn same_reading(a: Reading, b: Reading) -> bool {
     }
 }
 
-/// The unit vector of a grid heading in Carto's frame (x east, y north).
+/// The unit vector of a grid heading in Carto's frame (x east, y north): its step on the grid,
+/// whose rows grow southward.
 fn unit(h: Heading) -> (f64, f64) {
-    match h {
-        Heading::East => (1.0, 0.0),
-        Heading::West => (-1.0, 0.0),
-        Heading::North => (0.0, 1.0),
-        Heading::South => (0.0, -1.0),
-    }
+    let (rows, cols) = h.delta();
+    (f64::from(cols), -f64::from(rows))
 }
 
 #[cfg(test)]
