@@ -81,12 +81,13 @@ pub struct MotionNoise {
 }
 
 impl Default for MotionNoise {
-    /// The default robot: 1 % along (the odometry's σ over a cell), 2 % across, 2 % of a turn,
-    /// 0.1° per √s of gyro noise, a bias that wanders 0.01°/s per √s.
+    /// The default robot: 1 % along (the odometry's σ over a cell), 1.2 % across (measured in
+    /// the twin, `docs/journal/world-model.md`, "Round 4"), 2 % of a turn, 0.1° per √s of gyro
+    /// noise, a bias that wanders 0.01°/s per √s.
     fn default() -> Self {
         MotionNoise {
             along_per_m: 0.01,
-            across_per_m: 0.02,
+            across_per_m: 0.012,
             turn_per_rad: 0.02,
             gyro_rad_per_sqrt_s: 0.1f64.to_radians(),
             bias_walk: 0.01f64.to_radians(),
