@@ -127,7 +127,18 @@ impl BeliefTracker {
         let (ex, ey) = (f64::from(body.x) - f64::from(bx), f64::from(body.y) - f64::from(by));
         let th = f64::from(body.theta);
         let (e_along, e_across) = (ex * th.cos() + ey * th.sin(), -ex * th.sin() + ey * th.cos());
-        tracing::trace!(t_s, error, heading_error, e_along, e_across, th, bx, by, move_done, "Carto's belief against the truth");
+        tracing::trace!(
+            t_s,
+            error,
+            heading_error,
+            e_along,
+            e_across,
+            th,
+            bx,
+            by,
+            move_done,
+            "Carto's belief against the truth"
+        );
     }
 
     /// A contact started (one call for all the contacts that start in one physics step): its
