@@ -87,6 +87,10 @@ pub struct CartoConfig {
     pub sonar_mount_m: f64,
     /// Full opening angle of the sonar's cone, degrees (the HC-SR04's 15°).
     pub sonar_cone_deg: f64,
+    /// Rays the sensor model spreads evenly across the cone, the nearest audible one answering
+    /// (the profile's `sonar.rays`, the fan the twin casts): the localiser expects a range from
+    /// the same fan (`estimate/localiser.rs`).
+    pub sonar_rays: u32,
     /// The sonar's range: no echo means nothing closer than this, metres.
     pub sonar_max_m: f64,
     /// Room kept between the swept body and any echo point Carto knows, metres.
@@ -233,6 +237,7 @@ impl Default for CartoConfig {
             body_width_m: 0.24,
             sonar_mount_m: 0.13,
             sonar_cone_deg: 15.0,
+            sonar_rays: 5,
             sonar_max_m: 4.0,
             clearance_m: 0.02,
             stop_within_m: 0.02,
@@ -316,6 +321,7 @@ impl CartoConfig {
             body_width_m: f(g.body_width_m),
             sonar_mount_m: f(profile.sonar.mount_x_m),
             sonar_cone_deg: f(profile.sonar.cone_deg),
+            sonar_rays: profile.sonar.rays,
             sonar_sigma_m: f(profile.sonar.noise_sigma_cm) / 100.0,
             sonar_max_m: f(profile.sonar.max_cm) / 100.0,
             sonar_incidence_deg: f(profile.sonar.incidence_limit_deg),

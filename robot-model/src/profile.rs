@@ -236,7 +236,8 @@ pub struct SonarParams {
     pub mount_heading_deg: f32,
     /// Full cone width, degrees.
     pub cone_deg: f32,
-    /// Number of rays cast across the cone.
+    /// Number of rays cast across the cone (the twin casts them; Carto expects ranges from the
+    /// same fan, `CartoConfig::sonar_rays`).
     pub rays: u32,
     /// Shortest distance that gives an echo, centimetres.
     pub min_cm: f32,

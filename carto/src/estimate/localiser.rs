@@ -10,9 +10,11 @@
 //!   returns the correction; the pilot moves the odometry by it, so the next FORWARD aims at the
 //!   next cell's centre from the corrected position.
 //! - **What a range is compared with.** With a floor plan (the twin's `--known-room`), the
-//!   nearest surface a 7-ray fan across the cone meets within the incidence limit
-//!   ([`PoseFilter::correct_echo`]): the plan is exact, so every direction it has surfaces in
-//!   corrects. Without one, the surfaces heard straight ahead at rest ([`crate::walls`]): a
+//!   nearest surface the sensor model's fan of rays ([`CartoConfig::sonar_rays`], the fan the
+//!   twin casts) meets within the incidence limit ([`PoseFilter::correct_echo`]): the plan is
+//!   exact, so every direction it has surfaces in corrects. A fan with rays the sensor does not
+//!   have expects echoes it never returns (a leg between two of its rays), and the oblique
+//!   surface behind such a ray turns the difference into a sideways pull. Without one, the surfaces heard straight ahead at rest ([`crate::walls`]): a
 //!   surface kept from an echo within [`WALL_MAX_M`] when facing the same heading from the same
 //!   row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
 //!   measurement of the position along the heading with the noise of two readings, *relative to
@@ -98,8 +100,6 @@ pub const SAME_SPOT_DEG: f64 = 3.0;
 pub const WALL_MAX_M: f64 = 1.0;
 /// Echoes farther than this are not paired with the reading of the next cell, metres.
 pub const RELATIVE_MAX_M: f64 = 2.0;
-/// Rays that sample the cone for the expected range: the real cone is continuous.
-pub const FAN_RAYS: usize = 7;
 
 /// What the localiser did, for the counters.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -160,8 +160,7 @@ impl Localiser {
         let params = GridParams::default();
         let sonar = SonarModel::from_config(cfg);
         let half_cone = cfg.sonar_cone_deg / 2.0;
-        let fan_deg =
-            (0..FAN_RAYS).map(|k| -half_cone + 2.0 * half_cone * k as f64 / (FAN_RAYS - 1) as f64).collect();
+        let fan_deg = sonar_fan_deg(half_cone, cfg.sonar_rays);
         // one range against the grid: the sonar's noise, its 1 cm steps and where in its cell
         // the surface lies (a uniform error over a step has σ = step / √12)
         let uniform = |step: f64| step / 12f64.sqrt();
@@ -350,6 +349,15 @@ impl Localiser {
 }
 
 /// Whether two readings heard the same thing (the same echo within a range step, or both none).
+/// The sensor model's rays, degrees from the axis: `rays` spread evenly from `-half_cone` to
+/// `+half_cone`, one ray along the axis when there is only one.
+fn sonar_fan_deg(half_cone: f64, rays: u32) -> Vec<f64> {
+    match rays {
+        0 | 1 => vec![0.0],
+        n => (0..n).map(|k| -half_cone + 2.0 * half_cone * f64::from(k) / f64::from(n - 1)).collect(),
+    }
+}
+
 fn same_reading(a: Reading, b: Reading) -> bool {
     match (a, b) {
         (Reading::Echo(a), Reading::Echo(b)) => (a - b).abs() <= 0.02,
@@ -442,6 +450,25 @@ mod tests {
         // believed at 0.45, really at 0.50: 1.2 − 0.50 − 0.13
         let (dx, _) = loc.at_rest(ms(2000), cell(1), east(0.45), Reading::Echo(0.57));
         assert!((dx - 0.05).abs() < 0.015, "{dx}");
+    }
+
+    /// Gen pillars 40, seed 1, room known: ranges expected from rays the sonar does not have
+    /// (a 7-ray fan against the profile's 5) met pillar edges the sensor's rays miss, and each
+    /// difference, on an oblique surface, pulled the belief 2 cm sideways, to 10 cm off.
+    #[test]
+    fn a_known_room_expects_each_range_from_the_rays_the_sensor_model_casts() {
+        let profile = robot_model::profile::RobotProfile::default();
+        let loc = Localiser::new(&CartoConfig::from_profile(&profile));
+        let twin: Vec<f64> = robot_model::sensors::HcSr04::from_profile(&profile)
+            .ray_angles()
+            .iter()
+            .map(|a| f64::from(a.to_degrees()))
+            .collect();
+        assert_eq!(loc.fan_deg.len(), twin.len());
+        for (ours, theirs) in loc.fan_deg.iter().zip(&twin) {
+            assert!((ours - theirs).abs() < 1e-4, "{:?} against {twin:?}", loc.fan_deg);
+        }
+        assert_eq!(sonar_fan_deg(7.5, 1), vec![0.0]);
     }
 
     #[test]

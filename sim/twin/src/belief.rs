@@ -122,7 +122,23 @@ impl BeliefTracker {
             let offset = f64::from((body.x - cx).hypot(body.y - cy));
             keep_largest(offset, t_s, &mut r.stop_offset_max_m, &mut r.stop_offset_max_at_s);
         }
-        tracing::trace!(t_s, error, heading_error, "Carto's belief against the truth");
+        // the error in the body's frame, for measuring the dead reckoning's drift (journal,
+        // world-model "Round 4", `drift.py`)
+        let (ex, ey) = (f64::from(body.x) - f64::from(bx), f64::from(body.y) - f64::from(by));
+        let th = f64::from(body.theta);
+        let (e_along, e_across) = (ex * th.cos() + ey * th.sin(), -ex * th.sin() + ey * th.cos());
+        tracing::trace!(
+            t_s,
+            error,
+            heading_error,
+            e_along,
+            e_across,
+            th,
+            bx,
+            by,
+            move_done,
+            "Carto's belief against the truth"
+        );
     }
 
     /// A contact started (one call for all the contacts that start in one physics step): its

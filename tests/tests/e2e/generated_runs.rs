@@ -128,23 +128,24 @@ fn a_room_known_beforehand_is_mapped_without_the_touch_the_sonar_missed() {
     assert!(known.to_text().contains("known room      Carto was given every surface of the room"));
 }
 
-/// Generated office seed 16: at 533 s a FORWARD runs into a bin (23 cm across) that the sonar had
-/// heard from 135 s on, from 0.47 m at the nearest; Carto's nearest echo point then lay about half
-/// a metre from the spot (and its pose 5 cm off).
+/// Generated office seed 8: at 328 s a FORWARD runs into a disc 27 cm across (a bin) that the
+/// sonar had heard from 16 s on, from 0.43 m at the nearest; Carto's nearest echo point then lay
+/// 0.42 m from the spot (and its belief 6 cm off). (Office seed 16 showed the same until the pose
+/// filter's sideways noise was measured, issue 42 round 4: it now passes as the robot runs it.)
 /// Given every point the sonar heard, where it lies and never forgotten (`--known-echoes`, README
 /// "Perfect memory of the echoes"), the same Carto and Cute pass: what failed there was Carto's
 /// memory of an echo, not the sonar.
 #[test]
 fn a_perfect_memory_of_the_echoes_avoids_the_bin_the_sonar_had_heard() {
-    let blind = run_room_known(RoomStyle::Office, 16, Oracle::None).report(1.0);
-    assert!(blind.collisions > 0 && !blind.known_echoes, "office seed 16 as the robot runs it: {blind:?}");
+    let blind = run_room_known(RoomStyle::Office, 8, Oracle::None).report(1.0);
+    assert!(blind.collisions > 0 && !blind.known_echoes, "office seed 8 as the robot runs it: {blind:?}");
     let contact = blind.first_contact.as_ref().expect("a first contact");
     assert!(
         matches!(contact.touched_heard, Some(Heard::Before { nearest_m, .. }) if nearest_m < 1.0),
         "{contact:?}"
     );
     assert!(contact.touched_held_m.is_some_and(|m| m > 0.1), "{contact:?}");
-    let echoes = run_room_known(RoomStyle::Office, 16, Oracle::Echoes).report(1.0);
+    let echoes = run_room_known(RoomStyle::Office, 8, Oracle::Echoes).report(1.0);
     assert!(echoes.known_echoes && !echoes.known_room);
     assert_eq!(echoes.collisions, 0, "{:?}", echoes.first_contact);
     assert!(echoes.passed, "{:?}", echoes.checks);
