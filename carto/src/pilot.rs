@@ -47,7 +47,7 @@
 //! the stored pose changes only by `SEND_ROBOT_POSITION` or a completed move.
 //!
 //! ```
-//! use carto::pilot::{Health, Pilot, Reply, Request};
+//! use carto::pilot::{Health, Io, Pilot, Reply, Request};
 //! use carto::{motor::Motor, sensors::SensorState, ultrasound::Ultrasound, CartoConfig};
 //! use robot_model::grid::{Heading, Move};
 //! use robot_model::time::Instant;
@@ -58,7 +58,8 @@
 //! pilot.handle(now, Request::SetPose { x: 2, y: 3, direction: Ok(Heading::East) }, &mut motor);
 //! // a cartography move without the sensor board cannot run: MOVE_DONE only
 //! pilot.handle(now, Request::Cartography { command: Ok(Move::Forward) }, &mut motor);
-//! pilot.poll(now, &mut motor, &sensors, &us, Health { sensor_board: false, motor_board: true });
+//! let health = Health { sensor_board: false, motor_board: true };
+//! pilot.poll(&mut Io { now, motor: &mut motor, sensors: &sensors, us: &us, health });
 //! assert_eq!(pilot.take_replies(), vec![Reply::PositionReceived, Reply::MoveDone]);
 //! ```
 
@@ -146,6 +147,24 @@ pub struct Health {
     pub sensor_board: bool,
     /// The motor board link is up.
     pub motor_board: bool,
+}
+
+/// What one call of the pilot acts on: the time now, the motor controller it drives and what
+/// the boards say. [`crate::Carto`] builds it once per poll, after it polled the motor at `now`;
+/// every step of the pilot's state machine takes it whole rather than its parts.
+#[derive(Debug)]
+pub struct Io<'a> {
+    /// The time of this poll.
+    pub now: Instant,
+    /// The motor controller, polled at `now` already (it holds the outcome of a move that just
+    /// ended).
+    pub motor: &'a mut Motor,
+    /// The latest readings of the sensor board.
+    pub sensors: &'a SensorState,
+    /// The distance sensor's latest readings.
+    pub us: &'a Ultrasound,
+    /// Whether the boards are usable.
+    pub health: Health,
 }
 
 /// Counters kept by the pilot.
@@ -680,16 +699,9 @@ impl Pilot {
         self.end_task(now);
     }
 
-    /// Runs pending work. `motor` must have been polled at `now` already (it holds the outcome of
-    /// a move that just ended).
-    pub fn poll(
-        &mut self,
-        now: Instant,
-        motor: &mut Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
-        health: Health,
-    ) {
+    /// Runs pending work. `io.motor` must have been polled at `io.now` already (it holds the
+    /// outcome of a move that just ended).
+    pub fn poll(&mut self, io: &mut Io<'_>) {
         // Bounded: each pass either waits (returns) or consumes a command or a task.
         for _ in 0..1024 {
             match self.stage {
@@ -699,7 +711,7 @@ impl Pilot {
                     {
                         // the turn's MOVE_DONE has gone out: Cute and Carto hold the new heading
                         // whatever cuts the look; the next command waits in the queue
-                        self.look_past(now, turn, None, motor, sensors);
+                        self.look_past(io, turn, None);
                         continue;
                     }
                     if self.current.is_none() {
@@ -713,40 +725,40 @@ impl Pilot {
                     };
                     let kind = task.kind;
                     let Some(command) = task.commands.pop_front() else {
-                        self.end_task(now);
+                        self.end_task(io.now);
                         continue;
                     };
-                    self.start_command(now, kind, command, motor, sensors, health);
+                    self.start_command(io, kind, command);
                 }
                 Stage::Waiting { mv, since } => {
-                    if self.readings_fresh(now, sensors) {
-                        self.begin_move(now, mv, motor, sensors);
-                    } else if now.saturating_since(since) >= self.distance_wait {
-                        self.fail(now, "no fresh encoder and IMU readings");
+                    if self.readings_fresh(io) {
+                        self.begin_move(io, mv);
+                    } else if io.now.saturating_since(since) >= self.distance_wait {
+                        self.fail(io.now, "no fresh encoder and IMU readings");
                     } else {
                         return;
                     }
                 }
                 Stage::Checking { since } => {
-                    if !(health.sensor_board && health.motor_board) {
-                        self.fail(now, "a board is lost");
+                    if !(io.health.sensor_board && io.health.motor_board) {
+                        self.fail(io.now, "a board is lost");
                         continue;
                     }
                     // With a pose the odometry's offset is from the cell's centre, and the
                     // FORWARD ends on the next one (a reconnect can leave the robot mid-move).
                     let done_cm = if self.pose.is_some() {
-                        (motor.odometry().offset().along_m * 100.0) as f32
+                        (io.motor.odometry().offset().along_m * 100.0) as f32
                     } else {
                         0.0
                     };
-                    let check = if sensors.bumper_pressed() {
+                    let check = if io.sensors.bumper_pressed() {
                         Check::Obstacle { cm: 0.0 }
                     } else {
-                        us.check_ahead(now, self.rest_since, done_cm)
+                        io.us.check_ahead(io.now, self.rest_since, done_cm)
                     };
                     match check {
-                        Check::Pending if now.saturating_since(since) >= self.distance_wait => {
-                            self.fail(now, "no distance reading taken at rest");
+                        Check::Pending if io.now.saturating_since(since) >= self.distance_wait => {
+                            self.fail(io.now, "no distance reading taken at rest");
                         }
                         Check::Pending => return,
                         Check::Obstacle { cm } => {
@@ -755,19 +767,19 @@ impl Pilot {
                                 false,
                                 format!("obstacle ahead at {cm} cm: no motion"),
                             );
-                            if !sensors.bumper_pressed() {
-                                self.localise(now, Some(cm), motor, sensors);
+                            if !io.sensors.bumper_pressed() {
+                                self.localise(io, Some(cm));
                             }
-                            self.note_reading(Some(cm), motor, sensors);
+                            self.note_reading(io, Some(cm));
                             self.report_obstacle();
-                            self.end_task(now);
+                            self.end_task(io.now);
                         }
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");
-                            self.localise(now, cm, motor, sensors);
-                            self.note_reading(cm, motor, sensors);
+                            self.localise(io, cm);
+                            self.note_reading(io, cm);
                             self.scan_missing = false;
-                            self.look(now, 0, motor, sensors);
+                            self.look(io, 0);
                         }
                     }
                 }
@@ -775,107 +787,107 @@ impl Pilot {
                     if kind.is_turn() {
                         let target = if kind == Move::Left { 90.0 } else { -90.0 };
                         let window = safety::TURN_READING_WINDOW_DEG;
-                        self.note_turn_reading(now, target, window, since, motor, sensors, us);
+                        self.note_turn_reading(io, target, window, since);
                     }
-                    if kind == Move::Forward && sensors.bumper_pressed_since(since) {
-                        self.bumped(now, motor, sensors);
+                    if kind == Move::Forward && io.sensors.bumper_pressed_since(since) {
+                        self.bumped(io);
                         continue;
                     }
-                    if kind == Move::Forward && motor.is_busy() && self.poll_push_watch(sensors) {
-                        self.pushed(now, motor, sensors);
+                    if kind == Move::Forward && io.motor.is_busy() && self.poll_push_watch(io) {
+                        self.pushed(io);
                         continue;
                     }
                     // not on the poll the FORWARD ended: the odometry's origin has moved on
                     if kind == Move::Forward
-                        && motor.is_busy()
-                        && let Some(r) = self.new_drive_reading(since, motor, sensors, us)
+                        && io.motor.is_busy()
+                        && let Some(r) = self.new_drive_reading(io, since)
                     {
-                        self.note_drive_reading(r, motor, sensors);
+                        self.note_drive_reading(io, r);
                         if let Some(stall) = self.watch_forward(r) {
-                            self.stalled(now, stall, motor, sensors);
+                            self.stalled(io, stall);
                             continue;
                         }
                     }
-                    match motor.take_outcome() {
-                        None if motor.is_busy() => return,
+                    match io.motor.take_outcome() {
+                        None if io.motor.is_busy() => return,
                         None => {
                             // The move vanished (stopped from outside): treat as failed.
                             self.counters.moves_failed += 1;
                             self.edge_echoes.clear();
-                            self.end_task(now);
+                            self.end_task(io.now);
                         }
                         Some(Ok(())) => {
                             self.counters.moves_done += 1;
-                            self.rest_since = now;
+                            self.rest_since = io.now;
                             self.move_succeeded(kind);
                             self.stage = Stage::Next;
                             if kind.is_turn() {
-                                self.turn_made(now, kind, motor, sensors);
+                                self.turn_made(io, kind);
                             }
                         }
                         Some(Err(e)) => {
                             tracing::warn!(error = %e, ?kind, "move failed: robot stopped");
                             self.counters.moves_failed += 1;
                             if kind.is_turn() {
-                                self.turn_back(now, kind, motor, sensors);
+                                self.turn_back(io, kind);
                             } else {
                                 self.edge_echoes.clear();
-                                self.end_task(now);
+                                self.end_task(io.now);
                             }
                         }
                     }
                 }
-                Stage::Looking { look } => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
+                Stage::Looking { look } => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
                     None | Some(Ok(())) => {
-                        self.rest_since = now;
-                        self.stage = Stage::Reading { look, since: now };
+                        self.rest_since = io.now;
+                        self.stage = Stage::Reading { look, since: io.now };
                     }
-                    Some(Err(e)) => self.fail(now, &format!("scan before FORWARD: {e}")),
+                    Some(Err(e)) => self.fail(io.now, &format!("scan before FORWARD: {e}")),
                 },
                 Stage::Reading { look, since } => {
-                    if !self.scan_reading(now, look, since, motor, sensors, us) {
+                    if !self.scan_reading(io, look, since) {
                         return;
                     }
                 }
-                Stage::Shifting { mv } => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
-                    None | Some(Ok(())) => self.start_turn(now, mv, motor, sensors),
-                    Some(Err(e)) => self.turn_after_failed_shift(now, mv, motor, sensors, &e.to_string()),
+                Stage::Shifting { mv } => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
+                    None | Some(Ok(())) => self.start_turn(io, mv),
+                    Some(Err(e)) => self.turn_after_failed_shift(io, mv, &e.to_string()),
                 },
-                Stage::TurningBack { mv } => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
+                Stage::TurningBack { mv } => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
                     None | Some(Ok(())) => {
                         tracing::info!(?mv, "turned back to the heading the failed turn started from");
-                        self.rest_since = now;
-                        self.end_task(now);
+                        self.rest_since = io.now;
+                        self.end_task(io.now);
                     }
                     Some(Err(e)) => {
                         tracing::warn!(error = %e, ?mv, "turning back after a failed turn failed too");
-                        self.end_task(now);
+                        self.end_task(io.now);
                     }
                 },
-                Stage::Refacing { mv } => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
+                Stage::Refacing { mv } => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
                     None | Some(Ok(())) => {
-                        self.rest_since = now;
+                        self.rest_since = io.now;
                         self.reface_failures = 0;
-                        self.begin_move(now, mv, motor, sensors);
+                        self.begin_move(io, mv);
                     }
-                    Some(Err(e)) => self.refacing_failed(now, mv, motor, sensors, &e.to_string()),
+                    Some(Err(e)) => self.refacing_failed(io, mv, &e.to_string()),
                 },
                 Stage::LookingPast { back, since, unacked } => {
                     let window = self.safety.look_window_deg();
-                    self.note_turn_reading(now, 0.0, window, since, motor, sensors, us);
-                    match motor.take_outcome() {
-                        None if motor.is_busy() => return,
-                        None | Some(Ok(())) if !back => self.look_back(now, since, unacked, motor, sensors),
+                    self.note_turn_reading(io, 0.0, window, since);
+                    match io.motor.take_outcome() {
+                        None if io.motor.is_busy() => return,
+                        None | Some(Ok(())) if !back => self.look_back(io, since, unacked),
                         Some(Err(e)) if !back => {
                             tracing::warn!(error = %e, "looking past a turn failed: facing the heading again");
-                            self.look_back(now, since, unacked, motor, sensors);
+                            self.look_back(io, since, unacked);
                         }
                         outcome => {
-                            self.rest_since = now;
+                            self.rest_since = io.now;
                             self.stage = Stage::Next;
                             match outcome {
                                 // the motor marked the rotation cut: the next move faces the
@@ -886,29 +898,29 @@ impl Pilot {
                                 ),
                                 _ => {
                                     if let Some(turn) = unacked {
-                                        self.recentre(now, turn, motor, sensors);
+                                        self.recentre(io, turn);
                                     }
                                 }
                             }
                         }
                     }
                 }
-                Stage::Recentring { .. } => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
+                Stage::Recentring { .. } => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
                     outcome => {
                         if let Some(Err(e)) = outcome {
                             tracing::warn!(error = %e, "driving back to the cell's centre after a turn failed");
                         }
-                        self.rest_since = now;
+                        self.rest_since = io.now;
                         self.stage = Stage::Next;
                     }
                 },
-                Stage::BackingOff => match motor.take_outcome() {
-                    None if motor.is_busy() => return,
-                    None | Some(Ok(())) => self.end_task(now),
+                Stage::BackingOff => match io.motor.take_outcome() {
+                    None if io.motor.is_busy() => return,
+                    None | Some(Ok(())) => self.end_task(io.now),
                     Some(Err(e)) => {
                         tracing::warn!(error = %e, "back-off after the bumper, a stall or a push failed");
-                        self.end_task(now);
+                        self.end_task(io.now);
                     }
                 },
             }
@@ -948,34 +960,34 @@ impl Pilot {
     /// keeps the old one. Turning back makes them agree again (the next move then holds a grid
     /// heading, not the angle the body jammed at); the task ends with `MOVE_DONE` after it. Cute
     /// takes the turn as made and learns otherwise from the next FORWARD's reply.
-    fn turn_back(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
-        match motor.start_turn_back(now, sensors) {
+    fn turn_back(&mut self, io: &mut Io<'_>, mv: Move) {
+        match io.motor.start_turn_back(io.now, io.sensors) {
             Ok(()) => {
                 self.counters.turns_undone += 1;
                 self.stage = Stage::TurningBack { mv };
             }
             Err(e) => {
                 tracing::warn!(error = %e, ?mv, "cannot turn back after a failed turn");
-                self.end_task(now);
+                self.end_task(io.now);
             }
         }
     }
 
-    fn bumped(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
-        motor.stop(now);
+    fn bumped(&mut self, io: &mut Io<'_>) {
+        io.motor.stop(io.now);
         self.counters.bumps += 1;
-        tracing::warn!(travelled_m = ?motor.travelled_m(sensors), "bumper pressed during FORWARD: stopped");
-        self.end_stopped_forward(now, motor, sensors);
+        tracing::warn!(travelled_m = ?io.motor.travelled_m(io.sensors), "bumper pressed during FORWARD: stopped");
+        self.end_stopped_forward(io);
     }
 
     /// Feeds the push watch the drift estimate's counts now: the first sample after the FORWARD
     /// started becomes its baseline, and it fires when a later one jumped by more than
     /// [`crate::sensors::PUSH_JUMP_DEG`] (module docs, "Pushed"). Whether it fired.
-    fn poll_push_watch(&mut self, sensors: &SensorState) -> bool {
+    fn poll_push_watch(&mut self, io: &Io<'_>) -> bool {
         let Some(start) = self.push_watch.as_mut() else {
             return false;
         };
-        let now = sensors.drift_counts();
+        let now = io.sensors.drift_counts();
         if now.samples <= start.samples + 1 {
             // that sample still holds what the turn before did
             start.pushes = now.pushes;
@@ -986,46 +998,40 @@ impl Pilot {
 
     /// Something turned the body under its wheels during a FORWARD: stop and end as after the
     /// bumper (module docs, "Pushed").
-    fn pushed(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
-        motor.stop(now);
+    fn pushed(&mut self, io: &mut Io<'_>) {
+        io.motor.stop(io.now);
         self.counters.pushes += 1;
         tracing::warn!(
-            travelled_m = ?motor.travelled_m(sensors),
+            travelled_m = ?io.motor.travelled_m(io.sensors),
             "the IMU saw the body turned under its wheels during a FORWARD: stopped"
         );
-        self.end_stopped_forward(now, motor, sensors);
+        self.end_stopped_forward(io);
     }
 
     /// Ends a FORWARD stopped short (the bumper, a stall, a push): the echoes heard while it
     /// drove are forgotten (placed from odometry that did not see what stopped it), the cell
     /// ahead is reported blocked, and the robot drives back (by default) before `MOVE_DONE`.
-    fn end_stopped_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+    fn end_stopped_forward(&mut self, io: &mut Io<'_>) {
         self.edge_echoes.clear();
         self.localiser.touched();
         self.report_obstacle();
-        self.back_off_or_end(now, motor, sensors);
+        self.back_off_or_end(io);
     }
 
     /// The newest reading if it arrived after the FORWARD started at `since` and was not taken
     /// on an earlier poll (the straight reading at rest, taken before `since`, is not one), with
     /// the odometry carried to when the sonar measured (encoder counts arrive less often than
     /// distance frames).
-    fn new_drive_reading(
-        &mut self,
-        since: Instant,
-        motor: &Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
-    ) -> Option<DriveReading> {
-        let r = us.latest()?;
+    fn new_drive_reading(&mut self, io: &Io<'_>, since: Instant) -> Option<DriveReading> {
+        let r = io.us.latest()?;
         if r.at <= since || self.last_drive_reading.is_some_and(|t| r.at <= t) {
             return None;
         }
         self.last_drive_reading = Some(r.at);
-        let offset = motor.cell_offset(r.at - motor.config().sonar_lag, sensors);
+        let offset = io.motor.cell_offset(r.at - io.motor.config().sonar_lag, io.sensors);
         // a FORWARD drives at most 1½ cells (half a cell of slack either way): anything else is
         // a bad extrapolation, not a place to put an echo
-        let cell = motor.config().cell_size_m;
+        let cell = io.motor.config().cell_size_m;
         let driven_m = offset.along_m - self.forward_from_m;
         if r.value >= 0.0 && !(-0.5 * cell..=2.0 * cell).contains(&driven_m) {
             return None;
@@ -1048,8 +1054,8 @@ impl Pilot {
 
     /// The FORWARD is stalled (`pilot/stall.rs`): stop, take the sonar's word for how far the
     /// body went, report the cell ahead as blocked and drive back, as after the bumper.
-    fn stalled(&mut self, now: Instant, stall: Stall, motor: &mut Motor, sensors: &SensorState) {
-        motor.stop(now);
+    fn stalled(&mut self, io: &mut Io<'_>, stall: Stall) {
+        io.motor.stop(io.now);
         self.counters.stalls += 1;
         tracing::warn!(
             driven_m = stall.driven_m,
@@ -1058,16 +1064,16 @@ impl Pilot {
         );
         // the wheels went on after that echo while the body stood: the odometry now says where
         // the sonar put the body
-        let now_m = motor.cell_offset(now, sensors).along_m;
-        motor.correct_along(self.forward_from_m + stall.driven_m - now_m);
-        self.end_stopped_forward(now, motor, sensors);
+        let now_m = io.motor.cell_offset(io.now, io.sensors).along_m;
+        io.motor.correct_along(self.forward_from_m + stall.driven_m - now_m);
+        self.end_stopped_forward(io);
     }
 
     /// After a FORWARD stopped short: drive back to the cell it started from (by default), then
     /// `MOVE_DONE`.
-    fn back_off_or_end(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+    fn back_off_or_end(&mut self, io: &mut Io<'_>) {
         if self.back_off {
-            match motor.start_return(now, sensors) {
+            match io.motor.start_return(io.now, io.sensors) {
                 Ok(()) => {
                     self.stage = Stage::BackingOff;
                     return;
@@ -1075,6 +1081,6 @@ impl Pilot {
                 Err(e) => tracing::warn!(error = %e, "cannot back off"),
             }
         }
-        self.end_task(now);
+        self.end_task(io.now);
     }
 }

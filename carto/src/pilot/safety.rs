@@ -116,14 +116,11 @@
 use robot_model::grid::{GridPose, Heading, Move};
 use robot_model::time::Instant;
 
-use super::{DriveReading, Pilot, Stage, TaskKind};
+use super::{DriveReading, Io, Pilot, Stage, TaskKind};
 use crate::CartoConfig;
 use crate::estimate::sonar::Reading;
-use crate::motor::Motor;
 use crate::odometry::CellOffset;
-use crate::sensors::SensorState;
 use crate::surroundings::Pose2;
-use crate::ultrasound::Ultrasound;
 
 /// Step of the shift search before a turn, metres.
 const SHIFT_STEP_M: f64 = 0.01;
@@ -232,13 +229,13 @@ impl Pilot {
     /// Where Carto believes the robot is, in the frame of [`crate::surroundings`]: the stored
     /// cell's centre, plus the odometry's offset, facing the grid heading plus the IMU's offset
     /// from the reference heading. `None` without a pose from Cute.
-    pub(super) fn believed(&self, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
-        self.believed_with(motor.odometry().offset(), motor, sensors)
+    pub(super) fn believed(&self, io: &Io<'_>) -> Option<Pose2> {
+        self.believed_with(io, io.motor.odometry().offset())
     }
 
     /// [`Self::believed`] with the odometry's offset `off` from the stored cell's centre (carried
     /// to another moment).
-    fn believed_with(&self, off: CellOffset, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
+    fn believed_with(&self, io: &Io<'_>, off: CellOffset) -> Option<Pose2> {
         let GridPose { x: row, y: col, heading } = self.pose?;
         let nominal = heading_deg(heading);
         let centre = Pose2 {
@@ -247,7 +244,7 @@ impl Pilot {
             yaw_deg: nominal,
         };
         let (x, y) = centre.offset(off.along_m, off.left_m);
-        let turned = match (motor.reference_deg(), sensors.yaw_deg()) {
+        let turned = match (io.motor.reference_deg(), io.sensors.yaw_deg()) {
             (Some(reference), Some(yaw)) => yaw.value - reference,
             _ => 0.0,
         };
@@ -257,34 +254,28 @@ impl Pilot {
     /// Corrects the belief from the straight reading `cm` taken at rest now (module docs,
     /// "Belief"): the localiser's correction moves the odometry, and the reading is remembered
     /// for the stall watch.
-    pub(super) fn localise(
-        &mut self,
-        now: Instant,
-        cm: Option<f32>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
-        let (Some(pose), Some(robot)) = (self.pose, self.believed(motor, sensors)) else {
+    pub(super) fn localise(&mut self, io: &mut Io<'_>, cm: Option<f32>) {
+        let (Some(pose), Some(robot)) = (self.pose, self.believed(io)) else {
             self.last_straight = None;
             return;
         };
         let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
-        let (dx, dy) = self.localiser.at_rest(now, pose, robot, reading);
+        let (dx, dy) = self.localiser.at_rest(io.now, pose, robot, reading);
         if dx != 0.0 || dy != 0.0 {
             // into the nominal frame the odometry's offset is kept in
             let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
             let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
             tracing::debug!(fix.along_m, fix.left_m, "belief corrected from the range at rest");
             self.counters.pose_fixes += 1;
-            motor.correct_offset(fix);
+            io.motor.correct_offset(fix);
         }
         self.last_straight = cm.map(|cm| Straight { pose, range_m: f64::from(cm) / 100.0 });
     }
 
     /// Keeps a reading taken at rest: the echo `cm` from the sonar as a point (`None`: no echo),
     /// and clears the points it saw through.
-    pub(super) fn note_reading(&mut self, cm: Option<f32>, motor: &Motor, sensors: &SensorState) {
-        if let Some(robot) = self.believed(motor, sensors) {
+    pub(super) fn note_reading(&mut self, io: &Io<'_>, cm: Option<f32>) {
+        if let Some(robot) = self.believed(io) {
             let s = self.safety;
             let range = cm.map(|cm| f64::from(cm) / 100.0);
             self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
@@ -308,20 +299,17 @@ impl Pilot {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn note_turn_reading(
         &mut self,
-        now: Instant,
+        io: &Io<'_>,
         target_deg: f64,
         window_deg: f64,
         since: Instant,
-        motor: &Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
     ) {
         let s = self.safety;
-        let Some(r) = us.latest() else { return };
+        let Some(r) = io.us.latest() else { return };
         // a turn that ended on this poll has already moved the reference heading to its target
         // while the stored pose still faces the old one: the believed heading would be 90° off
         if !s.turn_readings
-            || !motor.is_busy()
+            || !io.motor.is_busy()
             || r.at < since
             || self.last_turn_reading.is_some_and(|t| r.at <= t)
         {
@@ -329,8 +317,7 @@ impl Pilot {
         }
         self.last_turn_reading = Some(r.at);
         let range = f64::from(r.value) / 100.0;
-        let (Some(pose), Some(mut robot), Some(yaw)) =
-            (self.pose, self.believed(motor, sensors), sensors.yaw_deg())
+        let (Some(pose), Some(mut robot), Some(yaw)) = (self.pose, self.believed(io), io.sensors.yaw_deg())
         else {
             return;
         };
@@ -339,13 +326,13 @@ impl Pilot {
         }
         // the heading when the sonar measured: the last IMU sample carried at the yaw rate to
         // the frame's arrival, less the sonar's lag
-        let cfg = motor.config();
+        let cfg = io.motor.config();
         let max_s = cfg.max_extrapolation.as_secs_f64();
         let measured_after_sample_s = (r.at.saturating_since(yaw.at).as_secs_f64()
             - yaw.at.saturating_since(r.at).as_secs_f64()
             - s.sonar_lag_s)
             .clamp(-max_s, max_s);
-        robot.yaw_deg += sensors.yaw_rate_dps(now, cfg) * measured_after_sample_s;
+        robot.yaw_deg += io.sensors.yaw_rate_dps(io.now, cfg) * measured_after_sample_s;
         let target = heading_deg(pose.heading) + target_deg;
         if crate::sensors::wrap180(robot.yaw_deg - target).abs() > window_deg {
             return;
@@ -369,21 +356,14 @@ impl Pilot {
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
     /// the turn went, by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back.
     /// When the look cannot start, the next command follows at once.
-    pub(super) fn look_past(
-        &mut self,
-        now: Instant,
-        turn: Move,
-        unacked: Option<Move>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
+    pub(super) fn look_past(&mut self, io: &mut Io<'_>, turn: Move, unacked: Option<Move>) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
-        match motor.start_look(now, past, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now, unacked },
+        match io.motor.start_look(io.now, past, io.sensors) {
+            Ok(()) => self.stage = Stage::LookingPast { back: false, since: io.now, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot look past the turn");
                 if let Some(turn) = unacked {
-                    self.recentre(now, turn, motor, sensors);
+                    self.recentre(io, turn);
                 }
             }
         }
@@ -394,22 +374,22 @@ impl Pilot {
     /// centre (shifted clear of an echo), the look runs at once, where the turning circle was
     /// clear, and the body then drives back to the centre before the `MOVE_DONE` ("Back to the
     /// centre" in the module docs).
-    pub(super) fn turn_made(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
-        if self.pose.is_none() || motor.odometry().offset().norm() <= RECENTRE_FROM_M {
+    pub(super) fn turn_made(&mut self, io: &mut Io<'_>, turn: Move) {
+        if self.pose.is_none() || io.motor.odometry().offset().norm() <= RECENTRE_FROM_M {
             self.look_pending = self.look_wanted().then_some(turn);
         } else if self.look_wanted() {
-            self.look_past(now, turn, Some(turn), motor, sensors);
+            self.look_past(io, turn, Some(turn));
         } else {
-            self.recentre(now, turn, motor, sensors);
+            self.recentre(io, turn);
         }
     }
 
     /// Drives the body back to its cell's centre, holding the heading, when the way there is
     /// clear of known echoes ("Back to the centre" in the module docs); otherwise the task ends
     /// where the body is.
-    pub(super) fn recentre(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
-        let off = motor.odometry().offset();
-        let Some(robot) = self.believed(motor, sensors) else {
+    pub(super) fn recentre(&mut self, io: &mut Io<'_>, turn: Move) {
+        let off = io.motor.odometry().offset();
+        let Some(robot) = self.believed(io) else {
             return;
         };
         if off.norm() <= RECENTRE_FROM_M {
@@ -441,7 +421,7 @@ impl Pilot {
             part = clear_to,
             "turned off the centre: driving back towards it"
         );
-        match motor.start_shift(now, -off.along_m * clear_to, -off.left_m * clear_to, sensors) {
+        match io.motor.start_shift(io.now, -off.along_m * clear_to, -off.left_m * clear_to, io.sensors) {
             Ok(()) => {
                 self.counters.turns_recentred += 1;
                 self.stage = Stage::Recentring { turn };
@@ -452,20 +432,13 @@ impl Pilot {
 
     /// Faces the grid heading again after looking past a turn; if that cannot start, the body
     /// may face off the heading, and the next move faces it first ([`Motor::rotation_was_cut`]).
-    pub(super) fn look_back(
-        &mut self,
-        now: Instant,
-        since: Instant,
-        unacked: Option<Move>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
-        match motor.start_look(now, 0.0, sensors) {
+    pub(super) fn look_back(&mut self, io: &mut Io<'_>, since: Instant, unacked: Option<Move>) {
+        match io.motor.start_look(io.now, 0.0, io.sensors) {
             Ok(()) => self.stage = Stage::LookingPast { back: true, since, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
-                motor.mark_rotation_cut();
-                self.rest_since = now;
+                io.motor.mark_rotation_cut();
+                self.rest_since = io.now;
                 self.stage = Stage::Next;
             }
         }
@@ -473,7 +446,7 @@ impl Pilot {
 
     /// Keeps the reading `r`, taken while a FORWARD drives (module docs, "Readings while
     /// driving"), placed from where the odometry says the robot was when the sonar measured.
-    pub(super) fn note_drive_reading(&mut self, r: DriveReading, motor: &Motor, sensors: &SensorState) {
+    pub(super) fn note_drive_reading(&mut self, io: &Io<'_>, r: DriveReading) {
         let s = self.safety;
         let range = f64::from(r.cm) / 100.0;
         // farther than this from the sonar, nothing can lie in the next FORWARD's corridor
@@ -482,7 +455,7 @@ impl Pilot {
             return;
         }
         let Some(pose) = self.pose else { return };
-        let Some(robot) = self.believed_with(r.offset, motor, sensors) else {
+        let Some(robot) = self.believed_with(io, r.offset) else {
             return;
         };
         tracing::trace!(
@@ -517,57 +490,49 @@ impl Pilot {
     }
 
     /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
-    pub(super) fn look(&mut self, now: Instant, look: usize, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn look(&mut self, io: &mut Io<'_>, look: usize) {
         let Some(&sign) = self.safety.looks().get(look) else {
-            return self.drive_forward(now, motor, sensors);
+            return self.drive_forward(io);
         };
         if look == 0
-            && let Err(e) = motor.learn_reference(now, sensors)
+            && let Err(e) = io.motor.learn_reference(io.now, io.sensors)
         {
-            return self.fail(now, &format!("scan before FORWARD: {e}"));
+            return self.fail(io.now, &format!("scan before FORWARD: {e}"));
         }
-        match motor.start_look(now, sign * self.safety.scan_deg, sensors) {
+        match io.motor.start_look(io.now, sign * self.safety.scan_deg, io.sensors) {
             Ok(()) => self.stage = Stage::Looking { look },
-            Err(e) => self.fail(now, &format!("scan before FORWARD: {e}")),
+            Err(e) => self.fail(io.now, &format!("scan before FORWARD: {e}")),
         }
     }
 
     /// Waits for the reading after look number `look`; `false` while it has not come.
-    pub(super) fn scan_reading(
-        &mut self,
-        now: Instant,
-        look: usize,
-        since: Instant,
-        motor: &mut Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
-    ) -> bool {
+    pub(super) fn scan_reading(&mut self, io: &mut Io<'_>, look: usize, since: Instant) -> bool {
         let last = look + 1 >= self.safety.looks().len();
         if !last {
-            match us.latest() {
+            match io.us.latest() {
                 Some(r) if r.at >= self.rest_since => {
-                    self.note_reading((r.value >= 0.0).then_some(r.value), motor, sensors);
+                    self.note_reading(io, (r.value >= 0.0).then_some(r.value));
                 }
-                _ if now.saturating_since(since) < self.distance_wait => return false,
+                _ if io.now.saturating_since(since) < self.distance_wait => return false,
                 _ => {
                     tracing::warn!(look, "no distance reading at rest during the scan");
                     self.scan_missing = true;
                 }
             }
         }
-        self.look(now, look + 1, motor, sensors);
+        self.look(io, look + 1);
         true
     }
 
     /// The corridor check, then the FORWARD.
-    fn drive_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+    fn drive_forward(&mut self, io: &mut Io<'_>) {
         if self.scan_missing {
-            return self.fail(now, "scan incomplete: no distance reading at rest");
+            return self.fail(io.now, "scan incomplete: no distance reading at rest");
         }
         let s = self.safety;
         let mut track_left_m = 0.0;
-        if let Some(robot) = self.believed(motor, sensors) {
-            let off = motor.odometry().offset();
+        if let Some(robot) = self.believed(io) {
+            let off = io.motor.odometry().offset();
             // along the track the move stops within its tolerance: the far end is the front face
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
             let to = s.cell_m - off.along_m + s.half_length_m;
@@ -599,7 +564,7 @@ impl Pilot {
                         tracing::info!(along_m = hit.0, left_m = hit.1, "echo in the body's path: no motion");
                         self.counters.corridor_blocked += 1;
                         self.report_obstacle();
-                        return self.end_task(now);
+                        return self.end_task(io.now);
                     }
                 }
             }
@@ -607,8 +572,8 @@ impl Pilot {
         if self.pose.is_none() {
             self.forget_surroundings();
         }
-        self.forward_from_m = motor.odometry().offset().along_m;
-        self.push_watch = self.push_watch_on.then(|| sensors.drift_counts());
+        self.forward_from_m = io.motor.odometry().offset().along_m;
+        self.push_watch = self.push_watch_on.then(|| io.sensors.drift_counts());
         if let Some(watch) = self.stall_watch.as_mut() {
             watch.restart();
             // the straight reading at rest just taken is the first echo of this FORWARD
@@ -616,9 +581,9 @@ impl Pilot {
                 watch.push(0.0, straight.range_m);
             }
         }
-        match motor.start_next_cell_on(now, track_left_m, sensors).map(|_| ()) {
-            Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
-            Err(e) => self.fail(now, &e.to_string()),
+        match io.motor.start_next_cell_on(io.now, track_left_m, io.sensors).map(|_| ()) {
+            Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },
+            Err(e) => self.fail(io.now, &e.to_string()),
         }
     }
 
@@ -644,21 +609,14 @@ impl Pilot {
 
     /// After a shift that did not end within tolerance: the turn runs if the circle is clear from
     /// where the robot believes it is now.
-    pub(super) fn turn_after_failed_shift(
-        &mut self,
-        now: Instant,
-        mv: Move,
-        motor: &mut Motor,
-        sensors: &SensorState,
-        why: &str,
-    ) {
-        let clear = self.believed(motor, sensors).is_none_or(|r| self.echo_in_turning_circle(r).is_none());
+    pub(super) fn turn_after_failed_shift(&mut self, io: &mut Io<'_>, mv: Move, why: &str) {
+        let clear = self.believed(io).is_none_or(|r| self.echo_in_turning_circle(r).is_none());
         if clear {
             tracing::info!(why, "shift before a turn ended off target, but the turning circle is clear");
-            self.start_turn(now, mv, motor, sensors);
+            self.start_turn(io, mv);
         } else {
             self.counters.turns_refused += 1;
-            self.fail(now, &format!("turn refused: the shift before it failed ({why})"));
+            self.fail(io.now, &format!("turn refused: the shift before it failed ({why})"));
         }
     }
 
@@ -675,15 +633,15 @@ impl Pilot {
     }
 
     /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
-    pub(super) fn turn_safely(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn turn_safely(&mut self, io: &mut Io<'_>, mv: Move) {
         let s = self.safety;
         let radius = s.turn_clear_m;
-        let robot = match self.believed(motor, sensors) {
+        let robot = match self.believed(io) {
             Some(robot) if s.safe_turns => robot,
-            _ => return self.start_turn(now, mv, motor, sensors),
+            _ => return self.start_turn(io, mv),
         };
         let Some(hit) = self.echo_in_turning_circle(robot) else {
-            return self.start_turn(now, mv, motor, sensors);
+            return self.start_turn(io, mv);
         };
         let max_m = 0.25 * s.cell_m;
         // searched in the frame of the last FORWARD's heading: behind is the way the body came
@@ -713,9 +671,9 @@ impl Pilot {
                     "turn: driving clear of a known echo first"
                 );
                 self.counters.turns_shifted += 1;
-                match motor.start_shift(now, metres, left_m, sensors) {
+                match io.motor.start_shift(io.now, metres, left_m, io.sensors) {
                     Ok(()) => self.stage = Stage::Shifting { mv },
-                    Err(e) => self.fail(now, &format!("shift before a turn: {e}")),
+                    Err(e) => self.fail(io.now, &format!("shift before a turn: {e}")),
                 }
             }
             None => {
@@ -726,7 +684,7 @@ impl Pilot {
                     hit.1 * 100.0,
                     0.25 * s.cell_m * 100.0
                 );
-                self.fail(now, &why);
+                self.fail(io.now, &why);
             }
         }
     }
