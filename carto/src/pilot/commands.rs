@@ -4,7 +4,8 @@
 use robot_model::grid::Move;
 use robot_model::time::Instant;
 
-use super::{Io, Pilot, Stage, TaskKind};
+use super::tasks::TaskKind;
+use super::{Io, Pilot, Stage};
 
 /// A failed re-facing this close to the grid heading lets the move start anyway, degrees
 /// ([`Pilot::refacing_failed`]).
@@ -39,10 +40,10 @@ impl Pilot {
                 return;
             }
         };
-        if kind == TaskKind::Cartography && self.pose.is_none() {
+        if kind == TaskKind::Cartography && self.place.pose().is_none() {
             return self.fail(io.now, "no robot position yet");
         }
-        if mv == Move::Forward && self.pose.is_some_and(|p| p.ahead().is_none()) {
+        if mv == Move::Forward && self.place.pose().is_some_and(|p| p.ahead().is_none()) {
             return self.fail(io.now, "the cell ahead is off the grid");
         }
         if !io.health.motor_board {
