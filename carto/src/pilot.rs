@@ -47,6 +47,14 @@
 //! board link ([`Pilot::on_link_lost`]) drops it;
 //! the stored pose changes only by `SEND_ROBOT_POSITION` or a completed move.
 //!
+//! Parts: the [`Pilot`] owns four components, each with its own state and methods, none reaching
+//! into another's: `tasks.rs` (the task queue and the partial batch), `localisation.rs` (the
+//! stored pose and the belief around it), `echoes.rs` (the echo points the safety checks ask) and
+//! `forward.rs` (the watches of a running FORWARD). The pilot itself holds the stage machine
+//! (`stage.rs`) and sequences the parts: requests and link events (`session.rs`), starting a
+//! command (`commands.rs`), the scan, corridor and turn checks (`safety.rs`). Every step of a
+//! poll takes one [`Io`]: the time, the motor and the readings.
+//!
 //! ```
 //! use carto::pilot::{Health, Io, Pilot, Reply, Request};
 //! use carto::{motor::Motor, sensors::SensorState, ultrasound::Ultrasound, CartoConfig};

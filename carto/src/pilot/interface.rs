@@ -135,8 +135,8 @@ pub struct PilotCounters {
 }
 /// A line about the client's input (a position, a STOP, a bad value) that the pilot wants
 /// logged. The pilot does not log these itself: [`crate::Carto`] takes them with
-/// [`Pilot::take_notes`] and logs them through its rate limiter, per kind and client, so a flood
-/// of frames cannot flood the log.
+/// [`Pilot::take_notes`](super::Pilot::take_notes) and logs them through its rate limiter, per
+/// kind and client, so a flood of frames cannot flood the log.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InputNote {
     /// The rate limiter's kind (a constant per call site).

@@ -2,9 +2,11 @@
 //! events of the links (a disconnect, a board fault, a lost link), which stop the motors and
 //! drop work.
 //!
-//! Invariants: a request never interrupts a running task (only STOP does); a dropped task gets no
-//! `MOVE_DONE` but after a board fault; a pose that differs from the stored one forgets the
-//! echoes, the belief's surfaces and the odometry's offset.
+//! Invariants: a request never interrupts a running task (only STOP does); STOP, a disconnect
+//! and a lost board link drop the running task, the queued ones and the partial batch without
+//! `MOVE_DONE`, while a board fault fails only the running move, whose task ends with
+//! `MOVE_DONE`; a pose that differs from the stored one forgets the echoes, the belief's surfaces
+//! and the odometry's offset.
 
 use robot_model::grid::{GridPose, Move};
 use robot_model::time::Instant;

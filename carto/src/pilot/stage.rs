@@ -18,7 +18,8 @@ pub(super) enum Stage {
     Moving { kind: Move, since: Instant },
     /// Driving back after a bumper hit or a stalled FORWARD.
     BackingOff,
-    /// The sonar scan before a FORWARD: look number `look` of [`Safety::looks`] runs.
+    /// The sonar scan before a FORWARD: look number `look` of
+    /// [`Safety::looks`](super::safety::Safety::looks) runs.
     Looking { look: usize },
     /// Waiting for a distance reading at rest after look number `look`.
     Reading { look: usize, since: Instant },
@@ -40,7 +41,8 @@ pub(super) enum Stage {
     Recentring { turn: Move },
 }
 
-/// What the pilot is doing ([`Pilot::activity`]), for logs and diagnostics.
+/// What the pilot is doing ([`Pilot::activity`](super::Pilot::activity)), for logs and
+/// diagnostics.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Activity {
     /// Nothing to do.
