@@ -40,7 +40,7 @@ use robot_model::time::Instant;
 use crate::CartoConfig;
 use crate::log_limited;
 use crate::motor::{Drive, Motor};
-use crate::pilot::{Health, Pilot, Request};
+use crate::pilot::{Health, Io, Pilot, Request};
 use crate::ratelimit::{RateLimiter, host_of, log_suppressed};
 use crate::sensors::{LineTimer, PeerEvent, SensorEvent, SensorState};
 use crate::ultrasound::Ultrasound;
@@ -404,7 +404,8 @@ impl Carto {
         self.sensors.estimate_imu_drift(now, &self.cfg, turning);
         self.motor.poll(now, &self.sensors);
         let health = self.health();
-        self.pilot.poll(now, &mut self.motor, &self.sensors, &self.ultrasound, health);
+        let mut io = Io { now, motor: &mut self.motor, sensors: &self.sensors, us: &self.ultrasound, health };
+        self.pilot.poll(&mut io);
         self.log_notes(now);
         self.flush_replies();
         self.flush_motor();

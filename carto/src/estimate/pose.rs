@@ -45,6 +45,9 @@ use nalgebra::{Matrix4, RowVector4, Vector4};
 use super::grid::EvidenceGrid;
 use crate::surroundings::Pose2;
 
+/// A vector in the plane, metres or unitless: `(x, y)`.
+type Vec2 = (f64, f64);
+
 /// A range further from the expected one than this many standard deviations is rejected.
 pub const GATE_SIGMAS: f64 = 3.0;
 /// A surface met more than this far from head-on gives no correction, degrees: the HC-SR04
@@ -255,7 +258,8 @@ impl PoseFilter {
         let sensor = (self.state[0] + mount_m * axis.0, self.state[1] + mount_m * axis.1);
         let max_m = range_m + GATE_SIGMAS * (sigma_m + self.sigma_along(theta.to_degrees())) + 0.1;
         let cos_limit = fan.incidence_limit_deg.min(MAX_INCIDENCE_DEG).to_radians().cos();
-        let mut nearest: Option<(f64, (f64, f64), (f64, f64), f64)> = None;
+        // the expected range, the ray's unit vector, the surface's normal and the cos of the incidence
+        let mut nearest: Option<(f64, Vec2, Vec2, f64)> = None;
         for offset in fan.ray_offsets_deg {
             let ray = theta + offset.to_radians();
             let u = (ray.cos(), ray.sin());

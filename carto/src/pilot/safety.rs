@@ -113,17 +113,15 @@
 //! Without a pose from Cute (the original Cute's trajectories) the points cannot be placed on the
 //! grid across moves: they are kept for one FORWARD's check only and turns are not checked.
 
-use robot_model::grid::{GridPose, Heading, Move};
+use robot_model::grid::Move;
 use robot_model::time::Instant;
 
-use super::{DriveReading, Pilot, Stage, TaskKind};
+use super::forward::DriveReading;
+use super::localisation::heading_deg;
+use super::{Io, Pilot, Stage};
 use crate::CartoConfig;
 use crate::estimate::sonar::Reading;
-use crate::motor::Motor;
-use crate::odometry::CellOffset;
-use crate::sensors::SensorState;
 use crate::surroundings::Pose2;
-use crate::ultrasound::Ultrasound;
 
 /// Step of the shift search before a turn, metres.
 const SHIFT_STEP_M: f64 = 0.01;
@@ -138,48 +136,41 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// overshoot a little before it settles).
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
 /// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
-const ASIDE_STEP_M: f64 = 0.0025;
+pub(super) const ASIDE_STEP_M: f64 = 0.0025;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
-const FAR_SIGMAS: f64 = 3.0;
-
-/// A straight reading at rest, remembered as the stall watch's first echo.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Straight {
-    pose: GridPose,
-    range_m: f64,
-}
+pub(super) const FAR_SIGMAS: f64 = 3.0;
 
 /// The geometry the checks need, from [`CartoConfig`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Safety {
-    scan_deg: f64,
-    cell_m: f64,
-    mount_m: f64,
-    half_cone_deg: f64,
-    max_range_m: f64,
-    half_length_m: f64,
-    half_width_m: f64,
-    clearance_m: f64,
+    pub(super) scan_deg: f64,
+    pub(super) cell_m: f64,
+    pub(super) mount_m: f64,
+    pub(super) half_cone_deg: f64,
+    pub(super) max_range_m: f64,
+    pub(super) half_length_m: f64,
+    pub(super) half_width_m: f64,
+    pub(super) clearance_m: f64,
     /// The swept circle of a turn plus the clearance: no known echo may lie inside it.
-    turn_clear_m: f64,
-    safe_turns: bool,
+    pub(super) turn_clear_m: f64,
+    pub(super) safe_turns: bool,
     /// Shifts before a turn may strafe across the heading too.
-    strafe_shifts: bool,
+    pub(super) strafe_shifts: bool,
     /// Keep the readings taken while a turn runs.
-    turn_readings: bool,
+    pub(super) turn_readings: bool,
     /// Keep the readings taken while a FORWARD drives.
-    drive_readings: bool,
+    pub(super) drive_readings: bool,
     /// How far past a finished turn the robot turns on and back, listening, degrees (0: off).
-    look_past_deg: f64,
+    pub(super) look_past_deg: f64,
     /// How long before its frame arrives a reading was measured.
-    sonar_lag_s: f64,
+    pub(super) sonar_lag_s: f64,
     /// One reading's noise, metres.
-    sonar_sigma_m: f64,
+    pub(super) sonar_sigma_m: f64,
     /// [`CartoConfig::drive_timing_m`].
-    drive_timing_m: f64,
+    pub(super) drive_timing_m: f64,
     /// How far beside the line through the centres a FORWARD's track may lie, metres
     /// ([`CartoConfig::stop_within_m`] less the lateral tolerance it ends within).
-    aside_max_m: f64,
+    pub(super) aside_max_m: f64,
 }
 
 impl Safety {
@@ -218,119 +209,43 @@ impl Safety {
     }
 }
 
-/// A grid heading as a counter-clockwise angle from east, degrees.
-fn heading_deg(h: Heading) -> f64 {
-    match h {
-        Heading::East => 0.0,
-        Heading::North => 90.0,
-        Heading::West => 180.0,
-        Heading::South => -90.0,
-    }
-}
-
 impl Pilot {
-    /// Where Carto believes the robot is, in the frame of [`crate::surroundings`]: the stored
-    /// cell's centre, plus the odometry's offset, facing the grid heading plus the IMU's offset
-    /// from the reference heading. `None` without a pose from Cute.
-    pub(super) fn believed(&self, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
-        self.believed_with(motor.odometry().offset(), motor, sensors)
-    }
-
-    /// [`Self::believed`] with the odometry's offset `off` from the stored cell's centre (carried
-    /// to another moment).
-    fn believed_with(&self, off: CellOffset, motor: &Motor, sensors: &SensorState) -> Option<Pose2> {
-        let GridPose { x: row, y: col, heading } = self.pose?;
-        let nominal = heading_deg(heading);
-        let centre = Pose2 {
-            x: f64::from(col) * self.safety.cell_m,
-            y: -f64::from(row) * self.safety.cell_m,
-            yaw_deg: nominal,
-        };
-        let (x, y) = centre.offset(off.along_m, off.left_m);
-        let turned = match (motor.reference_deg(), sensors.yaw_deg()) {
-            (Some(reference), Some(yaw)) => yaw.value - reference,
-            _ => 0.0,
-        };
-        Some(Pose2 { x, y, yaw_deg: nominal + turned })
-    }
-
     /// Corrects the belief from the straight reading `cm` taken at rest now (module docs,
-    /// "Belief"): the localiser's correction moves the odometry, and the reading is remembered
-    /// for the stall watch.
-    pub(super) fn localise(
-        &mut self,
-        now: Instant,
-        cm: Option<f32>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
-        let (Some(pose), Some(robot)) = (self.pose, self.believed(motor, sensors)) else {
-            self.last_straight = None;
-            return;
-        };
-        let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
-        let (dx, dy) = self.localiser.at_rest(now, pose, robot, reading);
-        if dx != 0.0 || dy != 0.0 {
-            // into the nominal frame the odometry's offset is kept in
-            let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
-            let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
-            tracing::debug!(fix.along_m, fix.left_m, "belief corrected from the range at rest");
+    /// "Belief").
+    pub(super) fn localise(&mut self, io: &mut Io<'_>, cm: Option<f32>) {
+        if self.place.at_rest(io, cm) {
             self.counters.pose_fixes += 1;
-            motor.correct_offset(fix);
         }
-        self.last_straight = cm.map(|cm| Straight { pose, range_m: f64::from(cm) / 100.0 });
     }
 
     /// Keeps a reading taken at rest: the echo `cm` from the sonar as a point (`None`: no echo),
     /// and clears the points it saw through.
-    pub(super) fn note_reading(&mut self, cm: Option<f32>, motor: &Motor, sensors: &SensorState) {
-        if let Some(robot) = self.believed(motor, sensors) {
-            let s = self.safety;
-            let range = cm.map(|cm| f64::from(cm) / 100.0);
-            self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
-            self.surroundings.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
-            self.edge_echoes.clear_footprint(robot, s.half_length_m, s.half_width_m);
-            if let Some(range) = range {
-                self.edge_echoes.clear_seen_through(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
-            }
+    pub(super) fn note_reading(&mut self, io: &Io<'_>, cm: Option<f32>) {
+        if let Some(robot) = self.place.believed(io) {
+            self.echoes.note_at_rest(robot, cm);
         }
-    }
-
-    /// Forgets every echo point (a new pose from Cute, or none: they were placed from another).
-    pub(super) fn forget_surroundings(&mut self) {
-        self.surroundings.clear();
-        self.edge_echoes.clear();
     }
 
     /// Keeps the newest reading if it arrived while a turn or a look past one, started at
     /// `since`, runs towards `target_deg` from the stored pose's heading, and the heading lies
     /// within `window_deg` of that target (module docs, "Readings in turns").
-    #[allow(clippy::too_many_arguments)]
     pub(super) fn note_turn_reading(
         &mut self,
-        now: Instant,
+        io: &Io<'_>,
         target_deg: f64,
         window_deg: f64,
         since: Instant,
-        motor: &Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
     ) {
         let s = self.safety;
-        let Some(r) = us.latest() else { return };
+        let Some(r) = io.us.latest() else { return };
         // a turn that ended on this poll has already moved the reference heading to its target
         // while the stored pose still faces the old one: the believed heading would be 90° off
-        if !s.turn_readings
-            || !motor.is_busy()
-            || r.at < since
-            || self.last_turn_reading.is_some_and(|t| r.at <= t)
-        {
+        if !s.turn_readings || !io.motor.is_busy() || r.at < since || !self.echoes.take_turn_reading(r.at) {
             return;
         }
-        self.last_turn_reading = Some(r.at);
         let range = f64::from(r.value) / 100.0;
         let (Some(pose), Some(mut robot), Some(yaw)) =
-            (self.pose, self.believed(motor, sensors), sensors.yaw_deg())
+            (self.place.pose(), self.place.believed(io), io.sensors.yaw_deg())
         else {
             return;
         };
@@ -339,21 +254,21 @@ impl Pilot {
         }
         // the heading when the sonar measured: the last IMU sample carried at the yaw rate to
         // the frame's arrival, less the sonar's lag
-        let cfg = motor.config();
+        let cfg = io.motor.config();
         let max_s = cfg.max_extrapolation.as_secs_f64();
         let measured_after_sample_s = (r.at.saturating_since(yaw.at).as_secs_f64()
             - yaw.at.saturating_since(r.at).as_secs_f64()
             - s.sonar_lag_s)
             .clamp(-max_s, max_s);
-        robot.yaw_deg += sensors.yaw_rate_dps(now, cfg) * measured_after_sample_s;
+        robot.yaw_deg += io.sensors.yaw_rate_dps(io.now, cfg) * measured_after_sample_s;
         let target = heading_deg(pose.heading) + target_deg;
         if crate::sensors::wrap180(robot.yaw_deg - target).abs() > window_deg {
             return;
         }
         tracing::trace!(x = robot.x, y = robot.y, yaw = robot.yaw_deg, range, "reading kept during a turn");
         self.counters.turn_readings += 1;
-        self.localiser.learn(robot, Reading::Echo(range));
-        self.keep_on_far_edge(robot, target, range);
+        self.place.learn(robot, Reading::Echo(range));
+        self.echoes.keep_on_far_edge(robot, target, range);
     }
 
     /// Whether the robot should look past the mapping turn that just succeeded (module docs,
@@ -362,28 +277,20 @@ impl Pilot {
     /// made; a look would make a STOP land before the batch's first position more often.
     pub(super) fn look_wanted(&self) -> bool {
         let s = self.safety;
-        let mapping = self.current.as_ref().is_some_and(|t| t.kind == TaskKind::Cartography);
-        s.turn_readings && s.look_past_deg > 0.0 && self.pose.is_some() && mapping
+        s.turn_readings && s.look_past_deg > 0.0 && self.place.pose().is_some() && self.tasks.mapping()
     }
 
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
     /// the turn went, by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back.
     /// When the look cannot start, the next command follows at once.
-    pub(super) fn look_past(
-        &mut self,
-        now: Instant,
-        turn: Move,
-        unacked: Option<Move>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
+    pub(super) fn look_past(&mut self, io: &mut Io<'_>, turn: Move, unacked: Option<Move>) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
-        match motor.start_look(now, past, sensors) {
-            Ok(()) => self.stage = Stage::LookingPast { back: false, since: now, unacked },
+        match io.motor.start_look(io.now, past, io.sensors) {
+            Ok(()) => self.stage = Stage::LookingPast { back: false, since: io.now, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot look past the turn");
                 if let Some(turn) = unacked {
-                    self.recentre(now, turn, motor, sensors);
+                    self.recentre(io, turn);
                 }
             }
         }
@@ -394,39 +301,28 @@ impl Pilot {
     /// centre (shifted clear of an echo), the look runs at once, where the turning circle was
     /// clear, and the body then drives back to the centre before the `MOVE_DONE` ("Back to the
     /// centre" in the module docs).
-    pub(super) fn turn_made(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
-        if self.pose.is_none() || motor.odometry().offset().norm() <= RECENTRE_FROM_M {
+    pub(super) fn turn_made(&mut self, io: &mut Io<'_>, turn: Move) {
+        if self.place.pose().is_none() || io.motor.odometry().offset().norm() <= RECENTRE_FROM_M {
             self.look_pending = self.look_wanted().then_some(turn);
         } else if self.look_wanted() {
-            self.look_past(now, turn, Some(turn), motor, sensors);
+            self.look_past(io, turn, Some(turn));
         } else {
-            self.recentre(now, turn, motor, sensors);
+            self.recentre(io, turn);
         }
     }
 
     /// Drives the body back to its cell's centre, holding the heading, when the way there is
     /// clear of known echoes ("Back to the centre" in the module docs); otherwise the task ends
     /// where the body is.
-    pub(super) fn recentre(&mut self, now: Instant, turn: Move, motor: &mut Motor, sensors: &SensorState) {
-        let off = motor.odometry().offset();
-        let Some(robot) = self.believed(motor, sensors) else {
+    pub(super) fn recentre(&mut self, io: &mut Io<'_>, turn: Move) {
+        let off = io.motor.odometry().offset();
+        let Some(robot) = self.place.believed(io) else {
             return;
         };
         if off.norm() <= RECENTRE_FROM_M {
             return;
         }
-        let s = self.safety;
-        let (hl, hw) = (s.half_length_m + s.clearance_m, s.half_width_m + s.clearance_m);
-        // from where the body is towards the centre, as far as the way is clear
-        let steps = (off.norm() / SHIFT_STEP_M).ceil() as i32;
-        let clear_to = (1..=steps)
-            .map(|k| f64::from(k) / f64::from(steps))
-            .take_while(|&t| {
-                let (x, y) = robot.offset(-off.along_m * t, -off.left_m * t);
-                self.surroundings.first_in_corridor(Pose2 { x, y, ..robot }, -hl, hl, hw).is_none()
-            })
-            .last()
-            .unwrap_or(0.0);
+        let clear_to = self.echoes.clear_part_of_way_back(robot, off, SHIFT_STEP_M);
         if clear_to * off.norm() < 2.0 * SHIFT_STEP_M {
             tracing::info!(
                 along = off.along_m,
@@ -441,7 +337,7 @@ impl Pilot {
             part = clear_to,
             "turned off the centre: driving back towards it"
         );
-        match motor.start_shift(now, -off.along_m * clear_to, -off.left_m * clear_to, sensors) {
+        match io.motor.start_shift(io.now, -off.along_m * clear_to, -off.left_m * clear_to, io.sensors) {
             Ok(()) => {
                 self.counters.turns_recentred += 1;
                 self.stage = Stage::Recentring { turn };
@@ -452,20 +348,13 @@ impl Pilot {
 
     /// Faces the grid heading again after looking past a turn; if that cannot start, the body
     /// may face off the heading, and the next move faces it first ([`Motor::rotation_was_cut`]).
-    pub(super) fn look_back(
-        &mut self,
-        now: Instant,
-        since: Instant,
-        unacked: Option<Move>,
-        motor: &mut Motor,
-        sensors: &SensorState,
-    ) {
-        match motor.start_look(now, 0.0, sensors) {
+    pub(super) fn look_back(&mut self, io: &mut Io<'_>, since: Instant, unacked: Option<Move>) {
+        match io.motor.start_look(io.now, 0.0, io.sensors) {
             Ok(()) => self.stage = Stage::LookingPast { back: true, since, unacked },
             Err(e) => {
                 tracing::warn!(error = %e, "cannot face the grid heading again after looking past a turn");
-                motor.mark_rotation_cut();
-                self.rest_since = now;
+                io.motor.mark_rotation_cut();
+                self.rest_since = io.now;
                 self.stage = Stage::Next;
             }
         }
@@ -473,7 +362,7 @@ impl Pilot {
 
     /// Keeps the reading `r`, taken while a FORWARD drives (module docs, "Readings while
     /// driving"), placed from where the odometry says the robot was when the sonar measured.
-    pub(super) fn note_drive_reading(&mut self, r: DriveReading, motor: &Motor, sensors: &SensorState) {
+    pub(super) fn note_drive_reading(&mut self, io: &Io<'_>, r: DriveReading) {
         let s = self.safety;
         let range = f64::from(r.cm) / 100.0;
         // farther than this from the sonar, nothing can lie in the next FORWARD's corridor
@@ -481,8 +370,8 @@ impl Pilot {
         if !s.drive_readings || !(0.0..=reach_m).contains(&range) {
             return;
         }
-        let Some(pose) = self.pose else { return };
-        let Some(robot) = self.believed_with(r.offset, motor, sensors) else {
+        let Some(pose) = self.place.pose() else { return };
+        let Some(robot) = self.place.believed_with(io, r.offset) else {
             return;
         };
         tracing::trace!(
@@ -495,214 +384,132 @@ impl Pilot {
         self.counters.drive_readings += 1;
         // the frame carries a result measured 0–2 mean lags before it and one is assumed: from a
         // fresher one the body was up to this much farther on, and the echo that much farther
-        self.keep_on_far_edge(robot, heading_deg(pose.heading), range + s.drive_timing_m);
-    }
-
-    /// Keeps the echo `range` heard from `robot` as a point for the next FORWARD's corridor check,
-    /// on the edge of the cone farther from that FORWARD's line (through `robot`, heading
-    /// `line_deg`). The echo may come from anywhere across the cone: so placed, it blocks the
-    /// FORWARD only when the whole arc lies in the body's path. It is kept [`FAR_SIGMAS`] sonar
-    /// σ beyond its range too: a FORWARD hears ten readings a second, and the closest of many
-    /// noisy readings of a wall just past the corridor's end would otherwise fall inside it.
-    fn keep_on_far_edge(&mut self, robot: Pose2, line_deg: f64, range: f64) {
-        let s = self.safety;
-        let range = range + FAR_SIGMAS * s.sonar_sigma_m;
-        let line = Pose2 { yaw_deg: line_deg, ..robot };
-        let (sx, sy) = robot.offset(s.mount_m, 0.0);
-        let edge = |side: f64| Pose2 { x: sx, y: sy, yaw_deg: robot.yaw_deg + side * s.half_cone_deg };
-        let beside_line = |edge: Pose2| line.local(edge.offset(range, 0.0)).1.abs();
-        let (right, left) = (edge(-1.0), edge(1.0));
-        let farther = if beside_line(right) >= beside_line(left) { right } else { left };
-        self.edge_echoes.add_echo(farther, 0.0, range);
+        self.echoes.keep_on_far_edge(robot, heading_deg(pose.heading), range + s.drive_timing_m);
     }
 
     /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
-    pub(super) fn look(&mut self, now: Instant, look: usize, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn look(&mut self, io: &mut Io<'_>, look: usize) {
         let Some(&sign) = self.safety.looks().get(look) else {
-            return self.drive_forward(now, motor, sensors);
+            return self.drive_forward(io);
         };
         if look == 0
-            && let Err(e) = motor.learn_reference(now, sensors)
+            && let Err(e) = io.motor.learn_reference(io.now, io.sensors)
         {
-            return self.fail(now, &format!("scan before FORWARD: {e}"));
+            return self.fail(io.now, &format!("scan before FORWARD: {e}"));
         }
-        match motor.start_look(now, sign * self.safety.scan_deg, sensors) {
+        match io.motor.start_look(io.now, sign * self.safety.scan_deg, io.sensors) {
             Ok(()) => self.stage = Stage::Looking { look },
-            Err(e) => self.fail(now, &format!("scan before FORWARD: {e}")),
+            Err(e) => self.fail(io.now, &format!("scan before FORWARD: {e}")),
         }
     }
 
     /// Waits for the reading after look number `look`; `false` while it has not come.
-    pub(super) fn scan_reading(
-        &mut self,
-        now: Instant,
-        look: usize,
-        since: Instant,
-        motor: &mut Motor,
-        sensors: &SensorState,
-        us: &Ultrasound,
-    ) -> bool {
+    pub(super) fn scan_reading(&mut self, io: &mut Io<'_>, look: usize, since: Instant) -> bool {
         let last = look + 1 >= self.safety.looks().len();
         if !last {
-            match us.latest() {
+            match io.us.latest() {
                 Some(r) if r.at >= self.rest_since => {
-                    self.note_reading((r.value >= 0.0).then_some(r.value), motor, sensors);
+                    self.note_reading(io, (r.value >= 0.0).then_some(r.value));
                 }
-                _ if now.saturating_since(since) < self.distance_wait => return false,
+                _ if io.now.saturating_since(since) < self.distance_wait => return false,
                 _ => {
                     tracing::warn!(look, "no distance reading at rest during the scan");
                     self.scan_missing = true;
                 }
             }
         }
-        self.look(now, look + 1, motor, sensors);
+        self.look(io, look + 1);
         true
     }
 
     /// The corridor check, then the FORWARD.
-    fn drive_forward(&mut self, now: Instant, motor: &mut Motor, sensors: &SensorState) {
+    fn drive_forward(&mut self, io: &mut Io<'_>) {
         if self.scan_missing {
-            return self.fail(now, "scan incomplete: no distance reading at rest");
+            return self.fail(io.now, "scan incomplete: no distance reading at rest");
         }
         let s = self.safety;
         let mut track_left_m = 0.0;
-        if let Some(robot) = self.believed(motor, sensors) {
-            let off = motor.odometry().offset();
+        if let Some(robot) = self.place.believed(io) {
+            let off = io.motor.odometry().offset();
             // along the track the move stops within its tolerance: the far end is the front face
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
             let to = s.cell_m - off.along_m + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
-            let known = self.surroundings.first_in_corridor(robot, s.mount_m, to, half);
-            let heard_moving = if known.is_none() {
-                self.edge_echoes.first_in_corridor(robot, s.mount_m, to, half)
-            } else {
-                None
-            };
-            if let Some(hit) = known.or(heard_moving) {
-                match self.sidestep(robot, off.left_m, to, half) {
+            if let Some(hit) = self.echoes.in_corridor(robot, to, half) {
+                match self.echoes.sidestep(robot, off.left_m, to, half) {
                     Some(track) => {
                         tracing::info!(
                             track_left_m = track,
-                            echo_along_m = hit.0,
-                            echo_left_m = hit.1,
+                            echo_along_m = hit.at.0,
+                            echo_left_m = hit.at.1,
                             "FORWARD on a track aside, clear of an echo beside the path"
                         );
                         self.counters.forwards_aside += 1;
                         track_left_m = track;
                     }
                     None => {
-                        if let Some((a, l)) = heard_moving {
+                        if hit.heard_moving {
                             // what refused this FORWARD, the turn that may follow keeps clear of
                             // too ("Kept while they hold")
-                            self.surroundings.add_point(robot, robot.offset(a, l));
+                            self.echoes.keep_as_at_rest(robot, hit.at);
                         }
-                        tracing::info!(along_m = hit.0, left_m = hit.1, "echo in the body's path: no motion");
+                        tracing::info!(
+                            along_m = hit.at.0,
+                            left_m = hit.at.1,
+                            "echo in the body's path: no motion"
+                        );
                         self.counters.corridor_blocked += 1;
                         self.report_obstacle();
-                        return self.end_task(now);
+                        return self.end_task(io.now);
                     }
                 }
             }
         }
-        if self.pose.is_none() {
-            self.forget_surroundings();
+        if self.place.pose().is_none() {
+            self.echoes.forget();
         }
-        self.forward_from_m = motor.odometry().offset().along_m;
-        self.push_watch = self.push_watch_on.then(|| sensors.drift_counts());
-        if let Some(watch) = self.stall_watch.as_mut() {
-            watch.restart();
-            // the straight reading at rest just taken is the first echo of this FORWARD
-            if let Some(straight) = self.last_straight.filter(|s| Some(s.pose) == self.pose) {
-                watch.push(0.0, straight.range_m);
-            }
+        self.forward.start(io, self.place.straight_range_m());
+        match io.motor.start_next_cell_on(io.now, track_left_m, io.sensors).map(|_| ()) {
+            Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },
+            Err(e) => self.fail(io.now, &e.to_string()),
         }
-        match motor.start_next_cell_on(now, track_left_m, sensors).map(|_| ()) {
-            Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: now },
-            Err(e) => self.fail(now, &e.to_string()),
-        }
-    }
-
-    /// The track nearest the line through the cells' centres (that line first), within
-    /// [`Safety::aside_max_m`] of it, along which
-    /// the FORWARD's corridor (`to_m` ahead, `half_m` either side) holds no echo point, from
-    /// `robot`, whose believed position is `left_m` left of the line through the centres
-    /// (module docs, "Corridor"). `None` when no such track clears.
-    fn sidestep(&self, robot: Pose2, left_m: f64, to_m: f64, half_m: f64) -> Option<f64> {
-        let s = self.safety;
-        let steps = (s.aside_max_m / ASIDE_STEP_M).floor() as i32;
-        let tracks = (1..=steps).flat_map(|k| [f64::from(k) * ASIDE_STEP_M, -f64::from(k) * ASIDE_STEP_M]);
-        std::iter::once(0.0).chain(tracks).find(|&track| {
-            // the body strafes from where it stands to the track as it starts: the corridor on
-            // the track is checked from the body's back face, beside it too
-            let (x, y) = robot.offset(0.0, track - left_m);
-            let on_track = Pose2 { x, y, ..robot };
-            [&self.surroundings, &self.edge_echoes]
-                .iter()
-                .all(|points| points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none())
-        })
     }
 
     /// After a shift that did not end within tolerance: the turn runs if the circle is clear from
     /// where the robot believes it is now.
-    pub(super) fn turn_after_failed_shift(
-        &mut self,
-        now: Instant,
-        mv: Move,
-        motor: &mut Motor,
-        sensors: &SensorState,
-        why: &str,
-    ) {
-        let clear = self.believed(motor, sensors).is_none_or(|r| self.echo_in_turning_circle(r).is_none());
+    pub(super) fn turn_after_failed_shift(&mut self, io: &mut Io<'_>, mv: Move, why: &str) {
+        let clear = self.place.believed(io).is_none_or(|r| self.echoes.in_turning_circle(r).is_none());
         if clear {
             tracing::info!(why, "shift before a turn ended off target, but the turning circle is clear");
-            self.start_turn(now, mv, motor, sensors);
+            self.start_turn(io, mv);
         } else {
             self.counters.turns_refused += 1;
-            self.fail(now, &format!("turn refused: the shift before it failed ({why})"));
+            self.fail(io.now, &format!("turn refused: the shift before it failed ({why})"));
         }
     }
 
-    /// The nearest known echo (ahead, left of the body, metres) inside the circle the body sweeps
-    /// turning at `robot`, after forgetting the echoes under the body: it stands there, so they
-    /// came from a wrong pose. Both turn checks ask this. After a shift that ended off target the
-    /// believed pose is the least sure, and an echo it puts under the body is forgotten all the
-    /// same: a reading at rest would forget it too, and keeping it would refuse every turn from
-    /// there.
-    fn echo_in_turning_circle(&mut self, robot: Pose2) -> Option<(f64, f64)> {
-        let s = self.safety;
-        self.surroundings.clear_footprint(robot, s.half_length_m, s.half_width_m);
-        self.surroundings.inside_circle(robot, s.turn_clear_m)
-    }
-
     /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
-    pub(super) fn turn_safely(&mut self, now: Instant, mv: Move, motor: &mut Motor, sensors: &SensorState) {
+    pub(super) fn turn_safely(&mut self, io: &mut Io<'_>, mv: Move) {
         let s = self.safety;
-        let radius = s.turn_clear_m;
-        let robot = match self.believed(motor, sensors) {
+        let robot = match self.place.believed(io) {
             Some(robot) if s.safe_turns => robot,
-            _ => return self.start_turn(now, mv, motor, sensors),
+            _ => return self.start_turn(io, mv),
         };
-        let Some(hit) = self.echo_in_turning_circle(robot) else {
-            return self.start_turn(now, mv, motor, sensors);
+        let Some(hit) = self.echoes.in_turning_circle(robot) else {
+            return self.start_turn(io, mv);
         };
         let max_m = 0.25 * s.cell_m;
         // searched in the frame of the last FORWARD's heading: behind is the way the body came
         // (swept), ahead the way it ranged; after a turn on the spot, behind the new heading is
         // space no reading covered (module docs, "Turns")
-        let turned_deg = match (self.pose, self.travel) {
-            (Some(pose), Some(travel)) => heading_deg(travel) - heading_deg(pose.heading),
-            _ => 0.0,
-        };
+        let turned_deg = self.place.travel_turned_deg();
         let travel_frame = Pose2 { yaw_deg: robot.yaw_deg + turned_deg, ..robot };
-        let shift = self
-            .surroundings
-            .clearing_shift(travel_frame, radius, max_m, SHIFT_STEP_M, s.strafe_shifts)
-            .map(|(along, left)| {
-                // into the body's frame, where the shift is driven
-                let (sin, cos) = turned_deg.to_radians().sin_cos();
-                let round = |v: f64| (v / SHIFT_STEP_M).round() * SHIFT_STEP_M;
-                (round(along * cos - left * sin) + 0.0, round(along * sin + left * cos) + 0.0)
-            });
+        let shift = self.echoes.clearing_shift(travel_frame, max_m, SHIFT_STEP_M).map(|(along, left)| {
+            // into the body's frame, where the shift is driven
+            let (sin, cos) = turned_deg.to_radians().sin_cos();
+            let round = |v: f64| (v / SHIFT_STEP_M).round() * SHIFT_STEP_M;
+            (round(along * cos - left * sin) + 0.0, round(along * sin + left * cos) + 0.0)
+        });
         match shift {
             Some((metres, left_m)) => {
                 tracing::info!(
@@ -713,9 +520,9 @@ impl Pilot {
                     "turn: driving clear of a known echo first"
                 );
                 self.counters.turns_shifted += 1;
-                match motor.start_shift(now, metres, left_m, sensors) {
+                match io.motor.start_shift(io.now, metres, left_m, io.sensors) {
                     Ok(()) => self.stage = Stage::Shifting { mv },
-                    Err(e) => self.fail(now, &format!("shift before a turn: {e}")),
+                    Err(e) => self.fail(io.now, &format!("shift before a turn: {e}")),
                 }
             }
             None => {
@@ -726,7 +533,7 @@ impl Pilot {
                     hit.1 * 100.0,
                     0.25 * s.cell_m * 100.0
                 );
-                self.fail(now, &why);
+                self.fail(io.now, &why);
             }
         }
     }
