@@ -14,9 +14,9 @@
 //!   twin casts) meets within the incidence limit ([`PoseFilter::correct_echo`]): the plan is
 //!   exact, so every direction it has surfaces in corrects. A fan with rays the sensor does not
 //!   have expects echoes it never returns (a leg between two of its rays), and the oblique
-//!   surface behind such a ray turns the difference into a sideways pull. Without one, the surfaces heard straight ahead at rest ([`crate::walls`]): a
-//!   surface kept from an echo within [`WALL_MAX_M`] when facing the same heading from the same
-//!   row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
+//!   surface behind such a ray turns the difference into a sideways pull. Without one, the
+//!   surfaces heard straight ahead at rest ([`crate::walls`]): a surface kept from an echo
+//!   within [`WALL_MAX_M`] when facing the same heading from the same row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
 //!   measurement of the position along the heading with the noise of two readings, *relative to
 //!   the pose the surface was placed from* ([`PoseFilter::correct_position_since`]): the
 //!   surface's depth carries that pose's error, so only the uncertainty added since (the motion,
@@ -348,7 +348,6 @@ impl Localiser {
     }
 }
 
-/// Whether two readings heard the same thing (the same echo within a range step, or both none).
 /// The sensor model's rays, degrees from the axis: `rays` spread evenly from `-half_cone` to
 /// `+half_cone`, one ray along the axis when there is only one.
 fn sonar_fan_deg(half_cone: f64, rays: u32) -> Vec<f64> {
@@ -358,6 +357,7 @@ fn sonar_fan_deg(half_cone: f64, rays: u32) -> Vec<f64> {
     }
 }
 
+/// Whether two readings heard the same thing (the same echo within a range step, or both none).
 fn same_reading(a: Reading, b: Reading) -> bool {
     match (a, b) {
         (Reading::Echo(a), Reading::Echo(b)) => (a - b).abs() <= 0.02,
