@@ -16,8 +16,9 @@
 //!   have expects echoes it never returns (a leg between two of its rays), and the oblique
 //!   surface behind such a ray turns the difference into a sideways pull. Without one, the
 //!   surfaces heard straight ahead at rest ([`crate::walls`]): a surface kept from an echo
-//!   within [`WALL_MAX_M`] when facing the same heading from the same row or column, else the reading of the cell behind (within [`RELATIVE_MAX_M`]), each a
-//!   measurement of the position along the heading with the noise of two readings, *relative to
+//!   within [`WALL_MAX_M`] when facing the same heading from the same row or column, else the
+//!   reading of the cell behind (within [`RELATIVE_MAX_M`]), each a measurement of the position
+//!   along the heading with the noise of two readings, *relative to
 //!   the pose the surface was placed from* ([`PoseFilter::correct_position_since`]): the
 //!   surface's depth carries that pose's error, so only the uncertainty added since (the motion,
 //!   a touch) is corrected; taken as absolute positions, the fixes counted the old uncertainty
