@@ -37,6 +37,8 @@
 use protocol::link::GuiMessage;
 use robot_model::time::Instant;
 
+mod view;
+
 use crate::CartoConfig;
 use crate::log_limited;
 use crate::motor::{Drive, Motor};
@@ -514,86 +516,10 @@ impl Carto {
         self.peer.is_some()
     }
 
-    /// Where Carto believes the robot is: the stored pose and the dead-reckoned offset from that
-    /// cell's centre (the `pose` and `cell_offset` of [`Carto::status`], without building the
-    /// whole snapshot). `None` until a pose is stored.
-    pub fn believed_pose(&self) -> Option<(GridPose, crate::odometry::CellOffset)> {
-        self.pilot.pose().map(|pose| (pose, self.motor.odometry().offset()))
-    }
-
-    /// Carto's belief of the robot's pose at `now` ([`Belief`]): what it would act on if it
-    /// moved now. Read-only; `None` until a pose is stored.
-    pub fn belief(&self, now: Instant) -> Option<Belief> {
-        let pose = self.pilot.pose()?;
-        Some(Belief {
-            pose,
-            offset: self.motor.cell_offset(now, &self.sensors),
-            off_heading_deg: self
-                .sensors
-                .predicted_yaw(now, self.motor.config())
-                .zip(self.motor.reference_deg())
-                .map_or(0.0, |(yaw, reference)| yaw - reference),
-        })
-    }
-
     /// Gives the safety checks known surface points, in the grid's metric frame
     /// (`crate::surroundings`), never forgotten: a floor plan, or points added as a run goes (the
     /// twin's analyses `--known-room` and `--known-echoes`).
     pub fn add_known_surfaces(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
         self.pilot.add_known_surfaces(points);
-    }
-
-    /// Every echo point the safety checks hold now, in the grid's metric frame
-    /// ([`crate::surroundings`]; the floor plan's not included).
-    pub fn echo_points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
-        self.pilot.echo_points()
-    }
-
-    /// What the pilot is doing now ([`Pilot::activity`]).
-    pub fn activity(&self) -> crate::pilot::Activity {
-        self.pilot.activity()
-    }
-
-    /// A snapshot of the state.
-    pub fn status(&self) -> CartoStatus {
-        CartoStatus {
-            pose: self.pilot.pose(),
-            busy: self.pilot.is_busy(),
-            pending: self.pilot.pending(),
-            client: self.peer.clone(),
-            sensor_board_ok: self.health().sensor_board,
-            motor_board_ok: self.motor_link_up,
-            command: self.motor.command(),
-            yaw_deg: self.sensors.yaw_deg().map(|y| y.value),
-            distance_cm: self.ultrasound.latest().map(|d| d.value),
-            cell_offset: self.motor.odometry().offset(),
-            imu_drift_deg: self.sensors.imu_drift_deg(),
-            coast_bias_m: self.motor.coast_bias_m(),
-        }
-    }
-
-    /// The counters.
-    pub fn stats(&self) -> CartoStats {
-        let p = self.pilot.counters();
-        CartoStats {
-            moves_done: p.moves_done,
-            moves_failed: p.moves_failed,
-            obstacles: p.obstacles,
-            bumps: p.bumps,
-            corridor_blocked: p.corridor_blocked,
-            forwards_aside: p.forwards_aside,
-            turns_shifted: p.turns_shifted,
-            turns_recentred: p.turns_recentred,
-            turns_refused: p.turns_refused,
-            turns_undone: p.turns_undone,
-            turn_readings: p.turn_readings,
-            drive_readings: p.drive_readings,
-            stalls: p.stalls,
-            pushes: p.pushes,
-            heading_jumps: self.sensors.imu_drift_jumps(),
-            push_jumps: self.sensors.drift_counts().pushes,
-            pose_fixes: p.pose_fixes,
-            ..self.stats
-        }
     }
 }

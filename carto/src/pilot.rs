@@ -75,6 +75,9 @@
 use robot_model::time::{Duration, Instant};
 
 use crate::CartoConfig;
+use crate::estimate::grid::EvidenceGrid;
+#[cfg(doc)]
+use crate::estimate::localiser::Localiser;
 use crate::ultrasound::Check;
 use robot_model::grid::{GridPose, Move};
 
@@ -162,6 +165,17 @@ impl Pilot {
     /// ([`crate::surroundings`]): those kept at rest and those heard moving (not the floor plan).
     pub fn echo_points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
         self.echoes.points()
+    }
+
+    /// The evidence grid the localiser builds from the readings (and the floor plan, when one is
+    /// given), in the grid's metric frame.
+    pub fn evidence(&self) -> &EvidenceGrid {
+        self.place.localiser().grid()
+    }
+
+    /// The covariance of the believed position, m² ([`Localiser::position_covariance`]).
+    pub fn position_covariance(&self) -> Option<[[f64; 2]; 2]> {
+        self.place.localiser().position_covariance()
     }
 
     /// What the pilot is doing now.

@@ -338,6 +338,15 @@ impl Localiser {
         })
     }
 
+    /// The covariance of the position, m², in Carto's metric frame (`[[xx, xy], [xy, yy]]`), as
+    /// the filter last left it; `None` before the first reading.
+    pub fn position_covariance(&self) -> Option<[[f64; 2]; 2]> {
+        self.filter.as_ref().map(|(f, ..)| {
+            let p = f.covariance();
+            [[p[(0, 0)], p[(0, 1)]], [p[(1, 0)], p[(1, 1)]]]
+        })
+    }
+
     /// The grid.
     pub fn grid(&self) -> &EvidenceGrid {
         &self.grid

@@ -65,6 +65,11 @@ impl Localisation {
         self.pose
     }
 
+    /// The localiser: its grid and its filter.
+    pub(super) fn localiser(&self) -> &Localiser {
+        &self.localiser
+    }
+
     /// The cell ahead of the stored pose, when there is one.
     pub(super) fn cell_ahead(&self) -> Option<(u8, u8)> {
         self.pose.and_then(|p| p.ahead())

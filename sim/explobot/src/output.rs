@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::args::ScreenshotArgs;
+use twin::carto_map::{BeliefEllipse, CartoMap};
 use twin::record::{FORMAT_VERSION, Recording, RecordingError};
 use twin::report::Report;
 use twin::runner::Lockstep;
@@ -155,6 +156,8 @@ pub fn map_picture(run: &Lockstep, known: &[Option<bool>]) -> image::RgbImage {
         blocked_moves: &run.blocked_moves(),
         trail: run.trail(),
         believed_trail: run.believed_trail(),
+        carto_map: &CartoMap::of(run.carto(), &run.frame()),
+        belief: BeliefEllipse::of(run.carto(), &run.frame(), run.now()),
         pose: (pose.x, pose.y, pose.theta),
         body: (geometry.body_length_m, geometry.body_width_m),
     }

@@ -6,7 +6,8 @@
 //!    the robot move until the map is complete; a click on a far mapped free cell brings the
 //!    robot there; at 1x (measured about 1x) another click sends it off and Stop halts it.
 //! 2. The default room: Max plays the script to its end (the same end as a headless run), the
-//!    verdict is shown and the twin keeps running; Reset map, then Cartography and click-to-go as
+//!    verdict is shown and the twin keeps running; the "Carto's map" button hides and shows
+//!    Carto's layer; Reset map, then Cartography and click-to-go as
 //!    in 1; Restart starts the scenario again and its script ends at the same time.
 //!
 //! Run: `xvfb-run -a -s "-screen 0 1280x800x24" env WGPU_BACKEND=vulkan \
@@ -372,7 +373,16 @@ fn issue_16_window_user_drives_after_the_default_script() {
     headless.run_to_end(|_| {});
     assert_eq!(headless.headless_end().map(|t| t.as_secs_f64()), Some(ended));
     // The twin goes on after the script.
-    w.wait("time goes on after the script", STEP_TIMEOUT, |s| t_s(s) > ended + 20.0);
+    let after = w.wait("time goes on after the script", STEP_TIMEOUT, |s| t_s(s) > ended + 20.0);
+    // Carto's layer: shown from the start, with the walls the sonar heard; its button hides it and
+    // shows it again.
+    assert_eq!(after["carto_layer"]["shown"], true, "{:?}", after["carto_layer"]);
+    assert!(after["carto_layer"]["occupied"].as_u64().unwrap() > 50, "{:?}", after["carto_layer"]);
+    assert!(after["carto_layer"]["free"].as_u64().unwrap() > 1000, "{:?}", after["carto_layer"]);
+    w.press("Carto's map");
+    w.wait("Carto's layer hidden", STEP_TIMEOUT, |s| s["carto_layer"]["shown"] == false);
+    w.press("Carto's map");
+    w.wait("Carto's layer shown again", STEP_TIMEOUT, |s| s["carto_layer"]["shown"] == true);
     // The user drives: a fresh map, the same buttons, a click.
     w.press("Reset map");
     w.wait("the map reset", STEP_TIMEOUT, |s| known_free(s) <= 2);

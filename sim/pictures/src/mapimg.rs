@@ -6,15 +6,19 @@
 //! the two cells share), the robot's true trail (blue), the trail Carto believed (dashed
 //! orange: the centre of the cell Carto stores plus its dead-reckoned offset, see
 //! [`twin::localisation::carto_belief`]) and the final pose (a box with a line towards its
-//! heading). A legend strip under the picture says what each colour means. A cell that is red
-//! over white floor, or green over black, is a map error; where the orange trail leaves the blue
-//! one, Carto was lost. The room itself is rasterised by [`twin::raster`], as the window's floor
-//! is.
+//! heading). Carto's own evidence grid ([`twin::carto_map`]) is drawn over Cute's cells: its
+//! free cells as a faint cyan wash, its occupied cells in dark teal; its belief at the end is an
+//! orange heading tick in the 2σ ellipse of its position filter. A legend strip under the picture
+//! says what each colour means. A cell that is red over white floor, or green over black, is a
+//! map error; teal off the black surfaces is Carto's grid placed wrong; where the orange trail
+//! leaves the blue one, Carto was lost. The room itself is rasterised by [`twin::raster`], as
+//! the window's floor is.
 
 use image::{Rgb, RgbImage};
 use robot_model::grid::Heading;
 
 use crate::picture::{LegendEntry, Swatch, blend, dashed_polyline, line, with_legend};
+use twin::carto_map::{BeliefEllipse, CartoMap, Occupancy};
 use twin::grid::GridFrame;
 use twin::raster::{Palette, PixelGrid, RoomShapes, bounds};
 use twin::scenario::Scenario;
@@ -32,11 +36,14 @@ const GRID_LINE: [u8; 3] = [170, 170, 200];
 const TRUE_TRAIL: [u8; 3] = [30, 80, 230];
 const BELIEVED_TRAIL: [u8; 3] = [245, 140, 0];
 const ROBOT: [u8; 3] = [0, 0, 160];
+/// Carto's evidence grid: free cells (a wash) and occupied cells.
+const CARTO_FREE_TINT: ([u8; 3], f32) = ([0, 170, 210], 0.22);
+const CARTO_OCCUPIED: [u8; 3] = [0, 120, 130];
 /// A move Cute's map records as blocked.
 const BLOCKED_MOVE: [u8; 3] = [200, 0, 170];
 
 /// What the colours of `map.png` mean, in the order the legend shows them.
-pub const LEGEND: [LegendEntry; 9] = [
+pub const LEGEND: [LegendEntry; 12] = [
     LegendEntry::new(Swatch::Fill(PALETTE.floor), "floor"),
     LegendEntry::new(Swatch::Fill(PALETTE.obstacle), "wall/obstacle"),
     LegendEntry::new(Swatch::Fill(PALETTE.outside), "outside the room"),
@@ -49,8 +56,14 @@ pub const LEGEND: [LegendEntry; 9] = [
         "Cute: obstacle",
     ),
     LegendEntry::new(Swatch::Line(BLOCKED_MOVE), "Cute: blocked move"),
+    LegendEntry::new(
+        Swatch::Tint { base: PALETTE.floor, tint: CARTO_FREE_TINT.0, alpha: CARTO_FREE_TINT.1 },
+        "Carto's grid: free",
+    ),
+    LegendEntry::new(Swatch::Fill(CARTO_OCCUPIED), "Carto's grid: occupied"),
     LegendEntry::new(Swatch::Line(TRUE_TRAIL), "true trail"),
     LegendEntry::new(Swatch::Dashed(BELIEVED_TRAIL), "Carto's belief"),
+    LegendEntry::new(Swatch::Line(BELIEVED_TRAIL), "its 2-sigma ellipse at the end"),
     LegendEntry::new(Swatch::Line(ROBOT), "robot at the end"),
 ];
 
@@ -75,6 +88,10 @@ pub struct MapPicture<'a> {
     pub trail: &'a [(f32, f32)],
     /// Where Carto believed the robot was, sampled with the true trail, world metres.
     pub believed_trail: &'a [(f32, f32)],
+    /// Carto's evidence grid at the end.
+    pub carto_map: &'a CartoMap,
+    /// Carto's belief at the end, with its uncertainty.
+    pub belief: Option<BeliefEllipse>,
     /// Final pose: x, y, heading (radians CCW).
     pub pose: (f32, f32, f32),
     /// Robot body length and width, metres.
@@ -92,6 +109,7 @@ impl MapPicture<'_> {
             }
         });
         let to_px = |x: f32, y: f32| grid.to_px(x, y);
+        self.draw_carto_map(&mut img, &to_px);
         for &(a, b) in self.blocked_moves {
             if let Some((p, q)) = shared_side(&self.frame, a, b) {
                 let (p, q) = (to_px(p.0, p.1), to_px(q.0, q.1));
@@ -119,7 +137,43 @@ impl MapPicture<'_> {
             line(&mut img, corners[i], corners[(i + 1) % 4], ROBOT);
         }
         line(&mut img, to_px(x, y), corner(hl * 1.6, 0.0), ROBOT);
+        if let Some(belief) = &self.belief {
+            let outline: Vec<(f32, f32)> = belief.outline(48).iter().map(|&(x, y)| to_px(x, y)).collect();
+            for k in 0..outline.len() {
+                line(&mut img, outline[k], outline[(k + 1) % outline.len()], BELIEVED_TRAIL);
+            }
+            let (bx, by, bth) = belief.pose;
+            let tick = hl * 0.8;
+            line(
+                &mut img,
+                to_px(bx, by),
+                to_px(bx + tick * bth.cos(), by + tick * bth.sin()),
+                BELIEVED_TRAIL,
+            );
+        }
         with_legend(img, &LEGEND)
+    }
+
+    /// Carto's grid over the room: free cells washed, occupied cells filled.
+    fn draw_carto_map(&self, img: &mut RgbImage, to_px: &impl Fn(f32, f32) -> (f32, f32)) {
+        let half = self.carto_map.cell_m * 0.5;
+        for &((x, y), occupancy) in &self.carto_map.cells {
+            let (p, q) = (to_px(x - half, y + half), to_px(x + half, y - half));
+            let (x0, y0) = (p.0.round().max(0.0) as u32, p.1.round().max(0.0) as u32);
+            let (x1, y1) =
+                ((q.0.round().max(0.0) as u32).max(x0 + 1), (q.1.round().max(0.0) as u32).max(y0 + 1));
+            for py in y0..y1.min(img.height()) {
+                for px in x0..x1.min(img.width()) {
+                    let here = img.get_pixel(px, py).0;
+                    let colour = match occupancy {
+                        Occupancy::Occupied => CARTO_OCCUPIED,
+                        Occupancy::Free => blend(here, CARTO_FREE_TINT.0, CARTO_FREE_TINT.1),
+                        Occupancy::Unknown => continue,
+                    };
+                    img.put_pixel(px, py, Rgb(colour));
+                }
+            }
+        }
     }
 }
 
@@ -192,5 +246,41 @@ mod tests {
         assert_eq!((p.1, q.1), (y, y));
         assert_eq!(shared_side(&frame, (1, 1), (2, 2)), None);
         assert_eq!(shared_side(&frame, (2, 3), (3, 3)), None, "row 3 is off a 3-row grid");
+    }
+
+    #[test]
+    fn carto_s_grid_and_belief_are_drawn_where_they_lie_in_the_room() {
+        let loaded = twin::setup::RunSetup::builtin_default().expect("the built-in room");
+        let frame = twin::grid::room_frame(&loaded.scenario.room, 0.3);
+        // an occupied cell and the belief on open floor of the default room
+        let (cell, belief) = ((0.33, 2.21), (0.9, 2.2));
+        let map = CartoMap { cell_m: 0.02, cells: vec![(cell, Occupancy::Occupied)] };
+        let ellipse =
+            BeliefEllipse::from_covariance((belief.0, belief.1, 0.0), [[2.5e-3, 0.0], [0.0, 2.5e-3]]);
+        let picture = MapPicture {
+            scenario: &loaded.scenario,
+            frame,
+            known: &[],
+            blocked_moves: &[],
+            trail: &[],
+            believed_trail: &[],
+            carto_map: &map,
+            belief: Some(ellipse),
+            pose: (0.3, 0.3, 0.0),
+            body: (0.2, 0.15),
+        };
+        let img = picture.render();
+        let (_, grid) = room_canvas(&loaded.scenario, &frame, |_, _, c| c);
+        let at = |x: f32, y: f32| {
+            let (px, py) = grid.to_px(x, y);
+            img.get_pixel(px as u32, py as u32).0
+        };
+        assert_eq!(at(cell.0, cell.1), CARTO_OCCUPIED);
+        // σ 5 cm: the 2σ ellipse passes 10 cm east of the believed centre
+        let east = grid.to_px(belief.0 + 0.1, belief.1);
+        let near =
+            (-1..=1).any(|d| img.get_pixel(east.0 as u32, (east.1 as i32 + d) as u32).0 == BELIEVED_TRAIL);
+        assert!(near, "no ellipse 10 cm east of the belief");
+        assert_ne!(at(belief.0 + 0.05, belief.1 + 0.02), BELIEVED_TRAIL, "inside the ellipse is not drawn");
     }
 }

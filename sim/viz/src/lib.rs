@@ -14,6 +14,8 @@
 //! | `/tf` | `foxglove.FrameTransforms` | every [`POSE_EVERY`] steps: `world`→`robot` (true), `world`→`carto` (believed) |
 //! | `/robot/pose` | `foxglove.PoseInFrame` | at 0, every [`POSE_EVERY`] steps and at the last step: the true pose |
 //! | `/carto/pose` | `foxglove.PoseInFrame` | with `/robot/pose`, once Carto stores a cell: the cell's centre plus Carto's dead-reckoned offset, its heading |
+//! | `/carto/belief` | `foxglove.SceneUpdate` | with `/robot/pose`, once Carto's filter has a reading: the 2σ ellipse of its position and its heading ([`twin::carto_map`]) |
+//! | `/carto/grid` | `foxglove.Grid` | every [`CARTO_GRID_EVERY`] steps and at the last step, when it changed: Carto's evidence grid ([`scene::carto_grid`]) |
 //! | `/sonar/rays` | `foxglove.SceneUpdate` | each HC-SR04 measurement: every ray, the echo kept in green |
 //! | `/sonar/range` | `SonarRange` | each measurement: reported cm, the kept echo's and the central ray's true cm, each ray's length and echo |
 //! | `/cute/map` | `foxglove.Grid` | when Cute's map changes (checked when Cute decodes a frame, and every [`POSE_EVERY`] steps) |
@@ -61,6 +63,10 @@ use twin::report::Report;
 
 /// Poses and transforms are logged every this many steps (100 ms at 5 ms).
 pub const POSE_EVERY: u64 = 20;
+
+/// Carto's evidence grid is logged at most every this many steps (10 s at 5 ms): a whole room's
+/// grid is a few hundred kilobytes.
+pub const CARTO_GRID_EVERY: u64 = 2000;
 
 /// Link bytes are logged in batches of this many steps (1 s at 5 ms); each chunk in a batch
 /// keeps its own time.

@@ -12,7 +12,8 @@ use transport::TraceRecord;
 
 use super::logs::Capture;
 use super::wire::{WireConfig, WireTap};
-use super::{BYTES_EVERY, Outbox, POSE_EVERY, Topic, scene};
+use super::{BYTES_EVERY, CARTO_GRID_EVERY, Outbox, POSE_EVERY, Topic, scene};
+use twin::carto_map::{BeliefEllipse, CartoMap};
 use twin::hardware::Twin;
 use twin::localisation::carto_belief;
 use twin::runner::{Endpoint, Lockstep, StepObserver};
@@ -132,6 +133,8 @@ pub struct Publisher {
     body: Body,
     wire: WireTap,
     carto: Topic<PoseInFrame>,
+    carto_grid: Topic<Grid>,
+    carto_belief: Topic<SceneUpdate>,
     map: Topic<Grid>,
     path: Topic<PosesInFrame>,
     log: Topic<Log>,
@@ -143,6 +146,9 @@ pub struct Publisher {
     planned: Option<Vec<(u8, u8)>>,
     last_grid: Option<Grid>,
     last_path: Option<PosesInFrame>,
+    /// Carto's grid as last published, and its message.
+    carto_cells: CartoMap,
+    last_carto_grid: Option<Grid>,
     resend: Arc<AtomicBool>,
 }
 
@@ -158,6 +164,8 @@ impl Publisher {
             body: Body::new(context, &outbox, run.loaded()),
             wire: WireTap::new(context, &outbox, wire_config(run.loaded(), false)),
             carto: outbox.topic(context, "/carto/pose"),
+            carto_grid: outbox.topic(context, "/carto/grid"),
+            carto_belief: outbox.topic(context, "/carto/belief"),
             map: outbox.topic(context, "/cute/map"),
             path: outbox.topic(context, "/cute/path"),
             log: outbox.topic(context, "/log"),
@@ -169,6 +177,8 @@ impl Publisher {
             planned: None,
             last_grid: None,
             last_path: None,
+            carto_cells: CartoMap::default(),
+            last_carto_grid: None,
             resend,
         };
         let (ns, _) = publisher.clock.at(run.now());
@@ -188,6 +198,18 @@ impl Publisher {
         let (pose, offset) = run.carto().believed_pose()?;
         let (x, y) = carto_belief(&run.frame(), pose, offset)?;
         Some((x, y, pose.heading.world_angle()))
+    }
+
+    /// Carto's evidence grid, when it changed.
+    fn publish_carto_grid(&mut self, run: &Lockstep, ns: u64) {
+        let cells = CartoMap::of(run.carto(), &run.frame());
+        if cells != self.carto_cells {
+            if let Some(grid) = scene::carto_grid(&cells, ns) {
+                self.carto_grid.log(&grid, ns);
+                self.last_carto_grid = Some(grid);
+            }
+            self.carto_cells = cells;
+        }
     }
 
     /// Cute's map and planned path, each when it changed.
@@ -223,6 +245,7 @@ impl StepObserver for Publisher {
             self.frames_in = 0;
             self.cells.clear();
             self.planned = None;
+            self.carto_cells = CartoMap::default();
             self.start(run, ns);
         }
         self.steps += 1;
@@ -239,6 +262,13 @@ impl StepObserver for Publisher {
             if let Some(c) = believed {
                 self.carto.log(&scene::pose_in_world(c, ns), ns);
             }
+            if let Some(belief) = BeliefEllipse::of(run.carto(), &run.frame(), run.now()) {
+                let reach = run.loaded().profile.geometry.body_length_m * 0.4;
+                self.carto_belief.log(&scene::belief_scene(&belief, reach, ns), ns);
+            }
+        }
+        if self.steps.is_multiple_of(CARTO_GRID_EVERY) || run.is_finished() {
+            self.publish_carto_grid(run, ns);
         }
         let frames_in = run.cute().counters().frames_in;
         if due || frames_in != self.frames_in {
@@ -255,6 +285,9 @@ impl StepObserver for Publisher {
             }
             if let Some(path) = &self.last_path {
                 self.path.log(path, ns);
+            }
+            if let Some(grid) = &self.last_carto_grid {
+                self.carto_grid.log(grid, ns);
             }
         }
     }

@@ -1,5 +1,6 @@
 //! The twin and Cute's picture of it as Foxglove's well-known messages: poses and transforms,
-//! the room as a `SceneUpdate`, Cute's map as a `Grid`, the planned path, the sonar rays.
+//! the room as a `SceneUpdate`, Cute's map as a `Grid`, the planned path, the sonar rays, and
+//! Carto's own evidence grid (a `Grid`) and belief ellipse (a `SceneUpdate`).
 //!
 //! Frames: `world` is the scenario's metres (x right, y up, z up); `robot` is the true body,
 //! `carto` the pose Carto believes. Every function here is pure: same input, same message.
@@ -22,6 +23,7 @@ use foxglove::messages::{
 use robot_model::grid::GridFrame;
 
 use twin::body::CastRay;
+use twin::carto_map::{BeliefEllipse, CartoMap, Occupancy};
 use twin::scenario::{Obstacle, Scenario};
 
 /// The fixed frame: the scenario's metres.
@@ -307,6 +309,86 @@ pub fn sonar_scene(rays: &[CastRay], ns: u64) -> SceneUpdate {
     SceneUpdate { deletions: Vec::new(), entities: vec![sonar] }
 }
 
+/// Carto's evidence grid as a `Grid` in `world`, over the box of the cells that hold evidence
+/// (`None` while none does). Colours as in `map.png` (free cyan, occupied teal, undecided and
+/// empty cells transparent); the field `value` is 0 for no evidence, 1 free, 2 undecided,
+/// 3 occupied.
+pub fn carto_grid(map: &CartoMap, ns: u64) -> Option<Grid> {
+    let cell = f64::from(map.cell_m.max(1e-3));
+    let (mut lo, mut hi) = ((f64::INFINITY, f64::INFINITY), (f64::NEG_INFINITY, f64::NEG_INFINITY));
+    for &((x, y), _) in &map.cells {
+        let (x, y) = (f64::from(x), f64::from(y));
+        lo = (lo.0.min(x), lo.1.min(y));
+        hi = (hi.0.max(x), hi.1.max(y));
+    }
+    if map.cells.is_empty() {
+        return None;
+    }
+    let index = |v: f64, from: f64| ((v - from) / cell).round().max(0.0) as usize;
+    let (cols, rows) = (index(hi.0, lo.0) + 1, index(hi.1, lo.1) + 1);
+    let mut data = vec![0u8; rows * cols * grid_bytes::CELL];
+    for &((x, y), occupancy) in &map.cells {
+        let (rgba, value) = match occupancy {
+            Occupancy::Free => ([0, 170, 210, 90], 1),
+            Occupancy::Unknown => ([0, 0, 0, 0], 2),
+            Occupancy::Occupied => ([0, 120, 130, 235], 3),
+        };
+        // a Grid's rows grow along +y from its origin
+        let i = (index(f64::from(y), lo.1) * cols + index(f64::from(x), lo.0)) * grid_bytes::CELL;
+        if let Some(texel) = data.get_mut(i..i + grid_bytes::CELL) {
+            texel[..4].copy_from_slice(&rgba);
+            texel[grid_bytes::VALUE] = value;
+        }
+    }
+    let field = |name: &str, offset: usize| PackedElementField {
+        name: name.to_string(),
+        offset: offset as u32,
+        r#type: packed_element_field::NumericType::Uint8 as i32,
+    };
+    Some(Grid {
+        timestamp: Some(timestamp(ns)),
+        frame_id: WORLD.to_string(),
+        pose: Some(Pose {
+            position: vec3(lo.0 - cell / 2.0, lo.1 - cell / 2.0, -0.005),
+            ..planar(0.0, 0.0, 0.0)
+        }),
+        column_count: cols as u32,
+        cell_size: Some(Vector2 { x: cell, y: cell }),
+        row_stride: (cols * grid_bytes::CELL) as u32,
+        cell_stride: grid_bytes::CELL as u32,
+        fields: vec![
+            field("red", 0),
+            field("green", 1),
+            field("blue", 2),
+            field("alpha", 3),
+            field("value", grid_bytes::VALUE),
+        ],
+        data: Bytes::from(data),
+    })
+}
+
+/// Carto's belief in `world`: the 2σ ellipse of its position and a line along its heading, in
+/// the orange of its believed pose.
+pub fn belief_scene(belief: &BeliefEllipse, length_m: f32, ns: u64) -> SceneUpdate {
+    let orange = color(0.96, 0.55, 0.0, 1.0);
+    let mut outline: Vec<Point3> = belief.outline(48).into_iter().map(|(x, y)| point(x, y, 0.12)).collect();
+    if let Some(first) = outline.first().cloned() {
+        outline.push(first);
+    }
+    let (x, y, heading) = belief.pose;
+    let tip = (x + length_m * heading.cos(), y + length_m * heading.sin());
+    let mut scene = entity("belief", WORLD, ns);
+    for (kind, points) in [
+        (line_primitive::Type::LineStrip, outline),
+        (line_primitive::Type::LineList, vec![point(x, y, 0.12), point(tip.0, tip.1, 0.12)]),
+    ] {
+        let mut l = line(kind, points, 0.006, orange.clone());
+        l.pose = None;
+        scene.lines.push(l);
+    }
+    SceneUpdate { deletions: Vec::new(), entities: vec![scene] }
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
@@ -339,5 +421,22 @@ mod tests {
             [ray(2.0, true, true), ray(0.5, true, false), ray(1.0, true, true), ray(4.0, false, false)];
         assert_eq!(kept_ray(&rays), Some(2));
         assert_eq!(kept_ray(&rays[1..2]), None);
+    }
+
+    #[test]
+    fn carto_grid_puts_each_cell_at_its_place_and_marks_what_it_is() {
+        let map = CartoMap {
+            cell_m: 0.02,
+            cells: vec![((1.0, 2.0), Occupancy::Free), ((1.04, 2.02), Occupancy::Occupied)],
+        };
+        let grid = carto_grid(&map, 0).unwrap();
+        assert_eq!(grid.column_count, 3);
+        assert_eq!(grid.data.len(), 2 * 3 * grid_bytes::CELL, "3 columns by 2 rows");
+        let value =
+            |row: usize, col: usize| grid.data[(row * 3 + col) * grid_bytes::CELL + grid_bytes::VALUE];
+        assert_eq!((value(0, 0), value(1, 2), value(0, 1)), (1, 3, 0));
+        let origin = grid.pose.unwrap().position.unwrap();
+        assert!((origin.x - 0.99).abs() < 1e-6 && (origin.y - 1.99).abs() < 1e-6, "{origin:?}");
+        assert!(carto_grid(&CartoMap::default(), 0).is_none());
     }
 }

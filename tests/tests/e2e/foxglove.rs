@@ -25,6 +25,8 @@ const CHANNELS: &[(&str, &str)] = &[
     ("/tf", "foxglove.FrameTransforms"),
     ("/robot/pose", "foxglove.PoseInFrame"),
     ("/carto/pose", "foxglove.PoseInFrame"),
+    ("/carto/belief", "foxglove.SceneUpdate"),
+    ("/carto/grid", "foxglove.Grid"),
     ("/sonar/rays", "foxglove.SceneUpdate"),
     ("/sonar/range", "sonarrange.SonarRange"),
     ("/cute/map", "foxglove.Grid"),
@@ -148,6 +150,9 @@ fn check_run(scenario: &str, dir: &TempDir) -> (Mcap, Value) {
     );
     assert_eq!(count(&m, "/tf"), count(&m, "/robot/pose"));
     assert!(count(&m, "/carto/pose") <= count(&m, "/robot/pose"));
+    assert!(count(&m, "/carto/belief") <= count(&m, "/carto/pose"));
+    // Carto's grid at most every 2,000 steps (10 s) and at the last step.
+    assert!(count(&m, "/carto/grid") <= 1 + steps / 2000, "{scenario}: {}", count(&m, "/carto/grid"));
     // Every frame the receivers decoded, and every error they saw, per link and direction.
     for link in ["motor", "sensor", "gui"] {
         assert_eq!(
@@ -183,6 +188,8 @@ fn issue_13_mcap_of_a_run_has_every_channel_and_the_report_counts() {
     assert_eq!(report["passed"], true);
     // The map grew cell by cell, and Carto and Cute had things to say.
     assert!(count(&m, "/cute/map") > 20, "{}", count(&m, "/cute/map"));
+    // Carto's grid grew as the robot went (a 360 s run: one every 10 s while it changed).
+    assert!(count(&m, "/carto/grid") >= 20, "{}", count(&m, "/carto/grid"));
     assert!(count(&m, "/log") > 0);
 
     // `explobot replay links.rec --mcap` writes the same channels and counts (here compressed).

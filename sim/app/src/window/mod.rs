@@ -3,7 +3,8 @@
 //! Concept: [`SimRenderPlugin`] draws what the physics knows — the room, the obstacles, the
 //! robot's body and its four wheels (tinted by their speed), the sonar rays of the last
 //! measurement (bright when they echo), the trail, the planning grid — in the left half of the
-//! window, and adds [`cute::gui::CutePlugin`] on [`Sim`] in the right half, so the operator sees
+//! window, with Carto's own evidence grid and belief over it as a layer that can be toggled
+//! ([`carto_layer`]), and adds [`cute::gui::CutePlugin`] on [`Sim`] in the right half, so the operator sees
 //! Cute's belief next to the truth and can drive Cute with its own buttons and clicks.
 //!
 //! Pacing: in window mode `Time<Fixed>` is not used. [`pace_lockstep`] runs in `Update` (in
@@ -21,7 +22,7 @@
 //! has not ended by then.
 //!
 //! Layout of this folder: `layout` (window size, [`WorldLayout`]), `draw` (floor texture,
-//! sprites, gizmos), `panels` (time controls, status bar), `session` (script → user handover,
+//! sprites, gizmos), `carto_layer` (Carto's grid and belief), `panels` (time controls, status bar), `session` (script → user handover,
 //! verdict, restart), `status_file` (`--status-file`); this file holds the plugin, the pacing
 //! system and screenshots.
 //!
@@ -61,12 +62,14 @@ use crate::pacing::{Pacing, Speed};
 use crate::plugin::{Sim, SimSystems};
 use twin::runner::Lockstep;
 
+pub mod carto_layer;
 mod draw;
 mod layout;
 mod panels;
 pub mod session;
 mod status_file;
 
+pub use carto_layer::CartoLayer;
 pub use draw::{FLOOR_RGB, OBSTACLE_RGB, OUTSIDE_RGB, PALETTE, ROBOT_RGB};
 pub use layout::{STATUS_HEIGHT, WINDOW_SIZE, WorldLayout};
 pub use session::{Handover, ScriptState};
@@ -139,14 +142,20 @@ impl Plugin for SimRenderPlugin {
             .init_resource::<Handover>()
             .init_resource::<ButtonRects>()
             .init_resource::<CuteUiState>()
-            .add_systems(Startup, draw::spawn_world)
+            .init_resource::<CartoLayer>()
+            .add_systems(Startup, (draw::spawn_world, carto_layer::spawn_layer))
             .add_systems(Update, session::restart_when_asked.before(SimSystems::Step))
             .add_systems(Update, pace_lockstep.in_set(SimSystems::Step))
             .add_systems(
                 Update,
                 status_file::write_status.after(SimSystems::Step).run_if(resource_exists::<StatusFile>),
             )
-            .add_systems(Update, (draw::place_world, draw::draw_world).chain().after(SimSystems::Step))
+            .add_systems(
+                Update,
+                (draw::place_world, draw::draw_world, carto_layer::draw_layer)
+                    .chain()
+                    .after(SimSystems::Step),
+            )
             .add_systems(EguiPrimaryContextPass, (panels::time_controls, panels::status_bar));
     }
 }

@@ -14,6 +14,7 @@ use bevy::window::{PrimaryWindow, Window};
 use cute::gui::ButtonRects;
 use cute::gui::bevy_egui::{EguiContexts, egui};
 
+use super::carto_layer::CartoLayer;
 use super::layout::STATUS_HEIGHT;
 use super::session::{Handover, ScriptState, StatusCache};
 use crate::pacing::{Pacing, Speed};
@@ -27,6 +28,7 @@ pub(super) fn time_controls(
     mut pacing: ResMut<Pacing>,
     mut handover: ResMut<Handover>,
     mut rects: ResMut<ButtonRects>,
+    mut layer: ResMut<CartoLayer>,
     sim: Res<Sim>,
 ) -> bevy::ecs::error::Result {
     let ctx = contexts.ctx_mut()?;
@@ -54,6 +56,14 @@ pub(super) fn time_controls(
             rects.record("Restart", &restart);
             if restart.clicked() {
                 handover.restart = true;
+            }
+            let carto = ui.selectable_label(layer.shown, "Carto's map").on_hover_text(
+                "Carto's own evidence grid (cyan free, teal occupied) and its belief (orange, with the \
+                 2-sigma ellipse of its position) over the true room",
+            );
+            rects.record("Carto's map", &carto);
+            if carto.clicked() {
+                layer.toggle();
             }
         });
         let run = &sim.0;

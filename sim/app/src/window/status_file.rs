@@ -4,7 +4,8 @@
 //! Concept: every [`STATUS_EVERY_S`] of wall time the file is written whole to `FILE.tmp` and
 //! renamed over `FILE`, so a reader never sees half a file. It holds the sim time, the speed, the
 //! script's state and verdict, the robot's true pose and cell, Cute's status, cell and map (one
-//! string per row: `.` known free, `#` obstacle, `?` unknown), the pop-ups waiting, where the map
+//! string per row: `.` known free, `#` obstacle, `?` unknown), whether the "Carto's map" layer is
+//! shown and how many of Carto's grid cells are occupied and free, the pop-ups waiting, where the map
 //! and every button are drawn (logical pixels, origin top-left) and the window's scale factor.
 //!
 //! Invariants: writing never stops the window: an error is reported once on stderr, and the
@@ -20,9 +21,11 @@ use cute::CellValue;
 use cute::gui::{ButtonRects, CuteUiState, CuteView, MapLayout};
 use serde_json::{Value, json};
 
+use super::carto_layer::CartoLayer;
 use super::session::{Handover, ScriptState};
 use crate::pacing::{Pacing, Speed};
 use crate::plugin::Sim;
+use twin::carto_map::{CartoMap, Occupancy};
 
 /// How often the status file is rewritten, wall seconds.
 pub const STATUS_EVERY_S: f64 = 0.2;
@@ -73,6 +76,7 @@ pub(super) fn write_status(
     rects: Res<ButtonRects>,
     ui: Res<CuteUiState>,
     view: Res<CuteView>,
+    layer: Res<CartoLayer>,
     time: Res<Time<Real>>,
     window: Query<&Window, With<PrimaryWindow>>,
 ) {
@@ -96,6 +100,7 @@ pub(super) fn write_status(
     let script = ScriptState::of(run);
     let buttons: serde_json::Map<String, Value> =
         rects.0.iter().map(|(k, r)| (k.clone(), rect_json(*r))).collect();
+    let carto_map = CartoMap::of(run.carto(), &run.frame());
     file.writes += 1;
     let status = json!({
         "writes": file.writes,
@@ -125,6 +130,11 @@ pub(super) fn write_status(
             "heading": format!("{heading:?}"),
             "known_free": map.cells().iter().filter(|v| v.is_known_free()).count(),
             "map": rows,
+        },
+        "carto_layer": {
+            "shown": layer.shown,
+            "occupied": carto_map.cells_that_are(Occupancy::Occupied).count(),
+            "free": carto_map.cells_that_are(Occupancy::Free).count(),
         },
         "popups": ui.popups.len(),
         "window": { "width": size.x, "height": size.y, "scale_factor": window.scale_factor() },
