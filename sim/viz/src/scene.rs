@@ -196,21 +196,25 @@ pub fn map_grid(map: &cute::Map, frame: &GridFrame, ns: u64) -> Grid {
             data.push(value.as_u8());
         }
     }
+    let bottom = frame.top - rows as f32 * frame.cell;
+    rgba_grid((f64::from(frame.left), f64::from(bottom), -0.01), cols, f64::from(frame.cell), data, ns)
+}
+
+/// A `Grid` in `world` of `cols` columns of square `cell`s (metres) whose lower-left corner is
+/// `origin`, from `data`: [`grid_bytes::CELL`] bytes per cell, RGBA then a `value`, bottom row
+/// first.
+fn rgba_grid(origin: (f64, f64, f64), cols: usize, cell: f64, data: Vec<u8>, ns: u64) -> Grid {
     let field = |name: &str, offset: usize| PackedElementField {
         name: name.to_string(),
         offset: offset as u32,
         r#type: packed_element_field::NumericType::Uint8 as i32,
     };
-    let bottom = frame.top - rows as f32 * frame.cell;
     Grid {
         timestamp: Some(timestamp(ns)),
         frame_id: WORLD.to_string(),
-        pose: Some(Pose {
-            position: vec3(f64::from(frame.left), f64::from(bottom), -0.01),
-            ..planar(0.0, 0.0, 0.0)
-        }),
+        pose: Some(Pose { position: vec3(origin.0, origin.1, origin.2), ..planar(0.0, 0.0, 0.0) }),
         column_count: cols as u32,
-        cell_size: Some(Vector2 { x: f64::from(frame.cell), y: f64::from(frame.cell) }),
+        cell_size: Some(Vector2 { x: cell, y: cell }),
         row_stride: (cols * grid_bytes::CELL) as u32,
         cell_stride: grid_bytes::CELL as u32,
         fields: vec![
@@ -340,31 +344,7 @@ pub fn carto_grid(map: &CartoMap, ns: u64) -> Option<Grid> {
             texel[grid_bytes::VALUE] = value;
         }
     }
-    let field = |name: &str, offset: usize| PackedElementField {
-        name: name.to_string(),
-        offset: offset as u32,
-        r#type: packed_element_field::NumericType::Uint8 as i32,
-    };
-    Some(Grid {
-        timestamp: Some(timestamp(ns)),
-        frame_id: WORLD.to_string(),
-        pose: Some(Pose {
-            position: vec3(lo.0 - cell / 2.0, lo.1 - cell / 2.0, -0.005),
-            ..planar(0.0, 0.0, 0.0)
-        }),
-        column_count: cols as u32,
-        cell_size: Some(Vector2 { x: cell, y: cell }),
-        row_stride: (cols * grid_bytes::CELL) as u32,
-        cell_stride: grid_bytes::CELL as u32,
-        fields: vec![
-            field("red", 0),
-            field("green", 1),
-            field("blue", 2),
-            field("alpha", 3),
-            field("value", grid_bytes::VALUE),
-        ],
-        data: Bytes::from(data),
-    })
+    Some(rgba_grid((lo.0 - cell / 2.0, lo.1 - cell / 2.0, -0.005), cols, cell, data, ns))
 }
 
 /// Carto's belief in `world`: the 2σ ellipse of its position and a line along its heading, in
