@@ -466,3 +466,58 @@ fn run_paced<M: Link, S: Link>(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        serve: ServeArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<ServeArgs, clap::Error> {
+        Cli::try_parse_from([&["sim", "--serve"], args].concat()).map(|c| c.serve)
+    }
+
+    #[test]
+    fn serial_devices_and_baud_overrides_become_the_options() {
+        let args = parse(&[
+            "--motor-port",
+            "/dev/ttyUSB0",
+            "--sensor-port",
+            "/dev/ttyUSB1",
+            "--sensor-baud",
+            "19200",
+        ])
+        .unwrap();
+        let options = args.options().unwrap();
+        assert!(
+            matches!(&options.ports, Ports::Serial { motor, sensor } if motor == "/dev/ttyUSB0" && sensor == "/dev/ttyUSB1")
+        );
+        assert_eq!((options.motor_baud, options.sensor_baud), (None, Some(19200)));
+        let loaded = RunSetup::builtin_default().unwrap();
+        assert_eq!(bauds(&loaded, &options), (115_200, 19_200));
+        assert!(args.ready_text("default", "m", "s").contains("--transport serial"));
+    }
+
+    #[test]
+    fn one_serial_device_alone_or_with_tcp_and_a_bad_baud_are_refused() {
+        assert!(parse(&["--motor-port", "/dev/ttyUSB0"]).is_err());
+        assert!(parse(&["--motor-port", "/dev/a", "--sensor-port", "/dev/b", "--tcp", "5000"]).is_err());
+        let args = parse(&["--motor-baud", "0"]).unwrap();
+        assert_eq!(args.options().unwrap_err(), OptionsError::Baud { which: "motor", baud: 0 });
+    }
+
+    #[test]
+    fn a_missing_device_is_not_found_naming_the_board_and_the_path() {
+        let ports =
+            Ports::Serial { motor: "/dev/ttyUSB-explobot-missing".into(), sensor: "/dev/null".into() };
+        let err = open_ports(&ports, (115_200, 9600)).err().unwrap();
+        assert_eq!(err.kind(), ErrorKind::NotFound);
+        let text = err.to_string();
+        assert!(text.contains("motor board") && text.contains("/dev/ttyUSB-explobot-missing"), "{text}");
+    }
+}
