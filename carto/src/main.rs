@@ -35,16 +35,15 @@ use std::time::Duration as StdDuration;
 
 use anyhow::{Context, Result, bail};
 use carto::backoff::Backoff;
+use carto::recording::{MaybeTraced, TracedListener};
 use carto::{Carto, CartoConfig, CartoRuntime};
 use clap::{Parser, ValueEnum};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use robot_model::profile::RobotProfile;
 use robot_model::time::{Duration, Instant};
-use transport::recorder::{Recorder, RecorderConfig, RecorderFeed};
+use transport::recorder::{Recorder, RecorderConfig};
 use transport::recording::{FORMAT_VERSION, Oracle, Recording};
-use transport::{
-    Clock, KeepAlive, Link, Listener, SerialLink, TcpLink, TcpListenerLink, TraceHandle, Tracer, WallClock,
-};
+use transport::{Clock, KeepAlive, Link, SerialLink, TcpLink, TcpListenerLink, TraceHandle, WallClock};
 
 const DEFAULT_PROFILE: &str = "scenarios/robots/mecanum-4wd.ron";
 /// Longest wait for the stop frame to leave on the way out.
@@ -322,88 +321,6 @@ impl AsFd for BoardLink {
     }
 }
 
-/// A link traced into the `--record` recording, or not.
-enum MaybeTraced<L> {
-    Plain(L),
-    Traced(Tracer<L>),
-}
-
-impl<L: Link> MaybeTraced<L> {
-    /// `link`, traced into `trace` if there is one.
-    fn new(link: L, trace: Option<(&TraceHandle, WallClock)>) -> Self {
-        match trace {
-            Some((handle, clock)) => MaybeTraced::Traced(Tracer::with_handle(link, clock, handle)),
-            None => MaybeTraced::Plain(link),
-        }
-    }
-}
-
-impl<L: Link> Link for MaybeTraced<L> {
-    type Error = L::Error;
-
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, L::Error> {
-        match self {
-            MaybeTraced::Plain(l) => l.read(buf),
-            MaybeTraced::Traced(l) => l.read(buf),
-        }
-    }
-
-    fn write(&mut self, buf: &[u8]) -> Result<usize, L::Error> {
-        match self {
-            MaybeTraced::Plain(l) => l.write(buf),
-            MaybeTraced::Traced(l) => l.write(buf),
-        }
-    }
-}
-
-impl<L: Link + AsFd> AsFd for MaybeTraced<L> {
-    fn as_fd(&self) -> BorrowedFd<'_> {
-        match self {
-            MaybeTraced::Plain(l) => l.as_fd(),
-            MaybeTraced::Traced(l) => l.inner().as_fd(),
-        }
-    }
-}
-
-/// Cute's listener; with `--record`, each accepted connection is traced as endpoint `carto#N`
-/// of link `gui`.
-struct ClientListener {
-    inner: TcpListenerLink,
-    record: Option<(RecorderFeed, WallClock)>,
-    accepted: u64,
-}
-
-impl Listener for ClientListener {
-    type Link = MaybeTraced<TcpLink>;
-    type Error = transport::Error;
-
-    fn accept(&mut self) -> Result<Option<(Self::Link, String)>, transport::Error> {
-        let Some((link, peer)) = self.inner.accept()? else {
-            return Ok(None);
-        };
-        self.accepted += 1;
-        let link = match &self.record {
-            Some((feed, clock)) => {
-                let traced = Tracer::new(link, *clock);
-                feed.add("gui", &format!("carto#{}", self.accepted), traced.handle());
-                MaybeTraced::Traced(traced)
-            }
-            None => MaybeTraced::Plain(link),
-        };
-        Ok(Some((link, peer)))
-    }
-
-    fn has_pending(&mut self) -> bool {
-        self.inner.has_pending()
-    }
-}
-
-impl AsFd for ClientListener {
-    fn as_fd(&self) -> BorrowedFd<'_> {
-        self.inner.as_fd()
-    }
-}
-
 /// `--record`: the recorder and the board links' traces, kept across reopenings.
 struct Record {
     recorder: Recorder,
@@ -468,7 +385,7 @@ impl Board {
 type BoardEnd = MaybeTraced<BoardLink>;
 
 struct Daemon {
-    rt: CartoRuntime<ClientListener, BoardEnd, BoardEnd>,
+    rt: CartoRuntime<TracedListener<TcpListenerLink, WallClock>, BoardEnd, BoardEnd>,
     clock: WallClock,
     record: Option<Record>,
     boards: [Board; 2],
@@ -549,11 +466,7 @@ impl Daemon {
             dead_after_s = cfg.client_dead_after.map(|d| d.as_secs_f64()),
             "carto ready: waiting for Cute"
         );
-        let listener = ClientListener {
-            inner: listener,
-            record: record.as_ref().map(|r| (r.recorder.feed(), clock)),
-            accepted: 0,
-        };
+        let listener = TracedListener::new(listener, record.as_ref().map(|r| (r.recorder.feed(), clock)));
         let mut rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
         rt.set_drain_on_close(DRAIN_ON_CLOSE);
         Ok(Daemon { rt, clock, record, boards, signal, wake, exit_on_link_loss: args.exit_on_link_loss })
