@@ -15,7 +15,7 @@ use protocol::link::{Command as Cmd, Direction, GuiMessage};
 // The twin's loader (`twin::record` re-exports the format from `transport::recording`).
 use twin::record::{Recording, RecordingError};
 
-use super::processes::{Carto, CuteClient, SerialPair, TempDir, Twin, wait_for};
+use super::processes::{Carto, CuteClient, OutputWithin, SerialPair, TempDir, Twin, wait_for};
 
 /// The default room's grid (`scenarios/default.ron`): 8 rows of 10 cells.
 const ROWS: usize = 8;
@@ -94,6 +94,31 @@ fn issue_44_a_missing_serial_device_is_a_clear_error() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("the motor board's port") && err.contains("/dev/ttyUSB-explobot-missing"), "{err}");
     assert!(err.contains("plugged in") && !err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn issue_44_an_adapter_unplugged_while_serving_ends_the_twin_with_a_clear_error() {
+    let dir = TempDir::new("explobot-hil-unplug");
+    let motor = SerialPair::new(&dir, "ttyUSB0", "ttyAMA0");
+    let sensor = SerialPair::new(&dir, "ttyUSB1", "ttyAMA1");
+    let mut twin = std::process::Command::new(super::processes::binary("explobot"));
+    twin.args(["sim", "--serve", "--status-every", "0", "--motor-port"])
+        .arg(&motor.a)
+        .arg("--sensor-port")
+        .arg(&sensor.a)
+        .current_dir(super::processes::workspace_root());
+    let motor_path = motor.a.display().to_string();
+    // The motor adapter goes away two seconds in (socat ends, its ptys close).
+    let unplug = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(2));
+        drop(motor);
+    });
+    let out = twin.output_within(Duration::from_secs(30));
+    unplug.join().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains(&format!("the motor board's serial port {motor_path} stopped working")), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
 }
 
 #[test]
