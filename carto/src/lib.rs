@@ -10,6 +10,7 @@ pub mod motor;
 pub mod odometry;
 pub mod pilot;
 pub mod ratelimit;
+pub mod recording;
 pub mod runtime;
 pub mod sensors;
 pub mod surroundings;

@@ -35,12 +35,15 @@ use std::time::Duration as StdDuration;
 
 use anyhow::{Context, Result, bail};
 use carto::backoff::Backoff;
+use carto::recording::{MaybeTraced, TracedListener};
 use carto::{Carto, CartoConfig, CartoRuntime};
 use clap::{Parser, ValueEnum};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use robot_model::profile::RobotProfile;
 use robot_model::time::{Duration, Instant};
-use transport::{Clock, KeepAlive, Link, SerialLink, TcpLink, TcpListenerLink, WallClock};
+use transport::recorder::{Recorder, RecorderConfig};
+use transport::recording::{FORMAT_VERSION, Oracle, Recording};
+use transport::{Clock, KeepAlive, Link, SerialLink, TcpLink, TcpListenerLink, TraceHandle, WallClock};
 
 const DEFAULT_PROFILE: &str = "scenarios/robots/mecanum-4wd.ron";
 /// Longest wait for the stop frame to leave on the way out.
@@ -106,6 +109,17 @@ struct Args {
     /// an echo lies in the body's path (0 = off, the default). docs/explanation/carto-design.md.
     #[arg(long, value_name = "DEGREES", default_value_t = 0.0)]
     scan_deg: f64,
+    /// Record every byte of both board links and of each client connection, with its time, to
+    /// FILE (the twin's `links.rec` format; endpoints `motor`/`carto`, `sensor`/`carto`,
+    /// `gui`/`carto#N`). The file is rewritten every --record-flush seconds, always complete.
+    #[arg(long, value_name = "FILE")]
+    record: Option<PathBuf>,
+    /// Largest recording, MiB: past it later bytes are not recorded (logged once).
+    #[arg(long, value_name = "MIB", default_value_t = 16.0, requires = "record")]
+    record_max_mib: f64,
+    /// Seconds between two rewrites of the recording: what a power cut may lose.
+    #[arg(long, value_name = "SECONDS", default_value_t = 10.0, requires = "record")]
+    record_flush: f64,
 }
 
 /// Why the main loop ended.
@@ -169,6 +183,7 @@ fn main() -> ExitCode {
         Err(_) => ("internal error (panic)".to_owned(), EXIT_PANIC, true),
     };
     let drained = daemon.stop_motors(emergency);
+    daemon.finish_recording();
     tracing::info!(why = %why, exit_code = code, stop_frame_sent = drained, stats = ?daemon.rt.carto().stats(), "carto stopped");
     if code == EXIT_FATAL {
         eprintln!("carto: error: {why}");
@@ -306,6 +321,49 @@ impl AsFd for BoardLink {
     }
 }
 
+/// `--record`: the recorder and the board links' traces, kept across reopenings.
+struct Record {
+    recorder: Recorder,
+    boards: [TraceHandle; 2],
+}
+
+/// Starts the `--record` recorder, or says why not (Carto then runs without recording).
+fn start_recording(args: &Args, profile: &RobotProfile) -> Result<Option<Record>> {
+    let Some(path) = args.record.clone() else {
+        return Ok(None);
+    };
+    if !(args.record_max_mib.is_finite() && args.record_max_mib > 0.0) {
+        bail!("--record-max-mib must be a positive number of MiB");
+    }
+    let flush = seconds("record-flush", args.record_flush)?
+        .with_context(|| "--record-flush must be more than 0 seconds")?;
+    let header = Recording {
+        version: FORMAT_VERSION,
+        scenario_label: format!("carto --record {}", path.display()),
+        scenario_ron: String::new(),
+        profile_ron: profile.to_ron_string().context("writing the profile into the recording")?,
+        seed: 0,
+        logs: Vec::new(),
+        oracle: Oracle::None,
+    };
+    let config = RecorderConfig {
+        max_bytes: (args.record_max_mib * 1024.0 * 1024.0) as u64,
+        flush_every: StdDuration::from_micros(flush.total_micros()),
+    };
+    let recorder = match Recorder::start(path.clone(), header, config) {
+        Ok(r) => r,
+        Err(e) => {
+            tracing::error!("not recording: {e}");
+            return Ok(None);
+        }
+    };
+    let boards = [TraceHandle::default(), TraceHandle::default()];
+    recorder.add("motor", "carto", boards[0].clone());
+    recorder.add("sensor", "carto", boards[1].clone());
+    tracing::info!(file = %path.display(), max_mib = args.record_max_mib, flush_s = args.record_flush, "recording every link");
+    Ok(Some(Record { recorder, boards }))
+}
+
 impl Board {
     fn open(&self, connect_timeout: StdDuration) -> Result<BoardLink> {
         let (which, port, baud) = (self.which, self.port.as_str(), self.baud);
@@ -323,9 +381,13 @@ impl Board {
     }
 }
 
+/// A board link as the runtime holds it.
+type BoardEnd = MaybeTraced<BoardLink>;
+
 struct Daemon {
-    rt: CartoRuntime<TcpListenerLink, BoardLink, BoardLink>,
+    rt: CartoRuntime<TracedListener<TcpListenerLink, WallClock>, BoardEnd, BoardEnd>,
     clock: WallClock,
+    record: Option<Record>,
     boards: [Board; 2],
     signal: Arc<AtomicUsize>,
     /// Read end of the pipe every stop signal writes a byte to: wakes `poll`.
@@ -368,12 +430,14 @@ impl Daemon {
             board("sensor", args.sensor_port.clone(), profile.serial.sensor_baud)?,
         ];
         let clock = WallClock::start();
+        let record = start_recording(&args, &profile)?;
         let mut links = Vec::new();
-        for b in &mut boards {
+        for (i, b) in boards.iter_mut().enumerate() {
             match b.open(StdDuration::from_secs(3)) {
                 Ok(link) => {
                     tracing::info!(board = b.which, port = %b.port, baud = b.baud, "board link open");
-                    links.push(Some(link));
+                    let trace = record.as_ref().map(|r| (&r.boards[i], clock));
+                    links.push(Some(MaybeTraced::new(link, trace)));
                 }
                 Err(e) if args.exit_on_link_loss => return Err(e),
                 Err(e) => {
@@ -402,9 +466,10 @@ impl Daemon {
             dead_after_s = cfg.client_dead_after.map(|d| d.as_secs_f64()),
             "carto ready: waiting for Cute"
         );
+        let listener = TracedListener::new(listener, record.as_ref().map(|r| (r.recorder.feed(), clock)));
         let mut rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
         rt.set_drain_on_close(DRAIN_ON_CLOSE);
-        Ok(Daemon { rt, clock, boards, signal, wake, exit_on_link_loss: args.exit_on_link_loss })
+        Ok(Daemon { rt, clock, record, boards, signal, wake, exit_on_link_loss: args.exit_on_link_loss })
     }
 
     /// Serves until a signal or a fatal error.
@@ -504,6 +569,8 @@ impl Daemon {
                     board.backoff.reset();
                     board.down_logged = false;
                     let now = self.clock.now();
+                    let trace = self.record.as_ref().map(|r| (&r.boards[i], self.clock));
+                    let link = MaybeTraced::new(link, trace);
                     if i == 0 {
                         self.rt.set_motor_link(link, now);
                     } else {
@@ -524,6 +591,20 @@ impl Daemon {
                     board.backoff.failed(now);
                 }
             }
+        }
+    }
+
+    /// Writes the `--record` recording a last time (the stop frame included) and closes it.
+    fn finish_recording(&mut self) {
+        if let Some(r) = self.record.take() {
+            let totals = r.recorder.finish();
+            tracing::info!(
+                recorded_bytes = totals.recorded,
+                dropped_bytes = totals.dropped,
+                writes = totals.writes,
+                failed_writes = totals.failed_writes,
+                "recording closed"
+            );
         }
     }
 

@@ -6,6 +6,8 @@ pub mod link;
 pub mod mem;
 #[cfg(unix)]
 pub mod pty;
+pub mod recorder;
+pub mod recording;
 #[cfg(unix)]
 pub mod serial;
 pub mod tcp;

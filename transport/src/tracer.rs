@@ -74,8 +74,9 @@ fn lock(records: &Records) -> MutexGuard<'_, Shared> {
     records.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// A cloneable handle on a [`Tracer`]'s records, for whoever writes the recording.
-#[derive(Debug, Clone)]
+/// A cloneable handle on a [`Tracer`]'s records, for whoever writes the recording. The default
+/// handle has no tracer yet: give it to [`Tracer::with_handle`].
+#[derive(Debug, Clone, Default)]
 pub struct TraceHandle {
     records: Records,
 }
@@ -105,6 +106,11 @@ impl TraceHandle {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Whether this handle is all that is left: no tracer and no other handle can add records.
+    pub fn is_last(&self) -> bool {
+        Arc::strong_count(&self.records) == 1
+    }
 }
 
 /// A link that records its traffic (see the [module docs](self)).
@@ -124,6 +130,12 @@ impl<L: Link> Tracer<L> {
     /// Wraps `inner`, stamping records with `clock`.
     pub fn new(inner: L, clock: impl Clock + 'static) -> Self {
         Tracer { inner, clock: Arc::new(clock), records: Arc::default() }
+    }
+
+    /// Wraps `inner`, adding to the records of `handle`: a link that is reopened carries on the
+    /// same trace (totals included).
+    pub fn with_handle(inner: L, clock: impl Clock + 'static, handle: &TraceHandle) -> Self {
+        Tracer { inner, clock: Arc::new(clock), records: Arc::clone(&handle.records) }
     }
 
     /// Takes every record so far, leaving none.
@@ -273,6 +285,24 @@ mod tests {
         assert_eq!(handle.len(), 1);
         assert_eq!(handle.take(), vec![rec(0, Direction::Written, b"1")]);
         assert!(handle.is_empty());
+    }
+
+    #[test]
+    fn a_reopened_link_continues_the_trace_of_its_handle() {
+        let clock = MockClock::new();
+        let (a, _b) = MemLink::pair(None, clock.clone());
+        let mut first = Tracer::new(a, clock.clone());
+        let handle = first.handle();
+        first.write(b"1").unwrap();
+        drop(first);
+        assert!(handle.is_last());
+        let (a, _b) = MemLink::pair(None, clock.clone());
+        let mut second = Tracer::with_handle(a, clock.clone(), &handle);
+        assert!(!handle.is_last());
+        clock.set(Instant::from_micros(7));
+        second.write(b"2").unwrap();
+        assert_eq!(handle.take(), vec![rec(0, Direction::Written, b"1"), rec(7, Direction::Written, b"2")]);
+        assert_eq!(handle.totals().written, 2);
     }
 
     #[test]

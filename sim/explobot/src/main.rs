@@ -44,7 +44,7 @@ enum Command {
     /// buttons, time controls (feature `window`).
     Window(WindowArgs),
     /// Run the twin in real time with its boards on pseudo-terminals (run/tty-motor,
-    /// run/tty-sensor) or TCP ports, for the real `carto` binary to drive.
+    /// run/tty-sensor), TCP ports or real serial devices, for the real `carto` binary to drive.
     Sim(ServeArgs),
     /// Decode frames from hex bytes: each frame, resync notes, checksum verdicts.
     Decode(wiretool::DecodeArgs),

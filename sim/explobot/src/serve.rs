@@ -1,14 +1,20 @@
 //! `explobot sim SCENARIO --serve`: the twin in real time, its boards behind real ports.
 //!
 //! The motor board and the sensor board appear as pseudo-terminals (stable symlinks
-//! `run/tty-motor` and `run/tty-sensor`, real paths printed) or as TCP ports, so an unchanged
-//! `carto` binary opens them exactly as it would open `/dev/ttyAMA0` and `/dev/ttyUSB0`. The
-//! physics steps at its fixed `dt`, paced to the wall clock times `speed` ([`twin_app::pacing`], as
-//! the window is).
+//! `run/tty-motor` and `run/tty-sensor`, real paths printed), as TCP ports, or on real serial
+//! devices (`--motor-port /dev/ttyUSB0 --sensor-port /dev/ttyUSB1`: USB-serial adapters wired to
+//! the Raspberry Pi's UARTs, hardware in the loop). An unchanged `carto` binary opens them exactly
+//! as it would open the boards. The physics steps at its fixed `dt`, paced to the wall clock times
+//! `speed` ([`twin_app::pacing`], as the window is).
 //!
-//! A pty ignores baud settings, so the twin enforces each UART's byte budget itself
-//! (`baud / 10` bytes per second, a 64-byte FIFO of credit): a sensor configuration that
-//! exceeds 9600 baud shows up as growing latency, as on the robot.
+//! Each UART's byte budget is enforced by the twin itself (`baud / 10` bytes per second, a 64-byte
+//! FIFO of credit), as a pty ignores baud settings: a sensor configuration that exceeds 9600 baud
+//! shows up as growing latency, as on the robot. Baud rates are the profile's (`serial`), or
+//! `--motor-baud` / `--sensor-baud`; a real serial port is opened at the same rates.
+//!
+//! A real serial port that cannot be opened, or that goes away while serving (an adapter
+//! unplugged), ends the run with an error naming the port; a pty or TCP client that leaves does
+//! not (the next one is served).
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -16,7 +22,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use robot_model::time::{Duration, Instant};
-use transport::{Clock, Error, Link, Listener, MockClock, PtyLink, TcpLink, TcpListenerLink, Tracer};
+use transport::{
+    Clock, Error, ErrorKind, Link, Listener, MockClock, PtyLink, SerialLink, TcpLink, TcpListenerLink, Tracer,
+};
 
 use twin::hardware::{Twin, WriteBudget};
 use twin::runner::Endpoint;
@@ -46,6 +54,13 @@ pub enum Ports {
         /// Sensor board address.
         sensor: SocketAddr,
     },
+    /// Real serial devices (or anything that opens as one), at the serving baud rates.
+    Serial {
+        /// Motor board device, e.g. `/dev/ttyUSB0`.
+        motor: String,
+        /// Sensor board device, e.g. `/dev/ttyUSB1`.
+        sensor: String,
+    },
 }
 
 /// How to serve.
@@ -59,6 +74,10 @@ pub struct ServeOptions {
     pub duration: Option<Duration>,
     /// Print a status line this often (simulated time; `None` = never).
     pub status_every: Option<Duration>,
+    /// Motor board baud rate (`None`: the profile's).
+    pub motor_baud: Option<u32>,
+    /// Sensor board baud rate (`None`: the profile's).
+    pub sensor_baud: Option<u32>,
 }
 
 /// `explobot sim --serve`'s arguments.
@@ -70,8 +89,21 @@ pub struct ServeArgs {
     #[arg(long, required = true)]
     pub serve: bool,
     /// Expose the boards as TCP ports BASE (motor) and BASE+1 (sensor) instead of ptys.
-    #[arg(long, value_name = "BASE")]
+    #[arg(long, value_name = "BASE", conflicts_with = "motor_port")]
     pub tcp: Option<u16>,
+    /// Serve the motor board on this serial device (e.g. /dev/ttyUSB0, a USB-serial adapter
+    /// wired to the Pi's motor UART) instead of a pty; needs --sensor-port.
+    #[arg(long, value_name = "PATH", requires = "sensor_port")]
+    pub motor_port: Option<String>,
+    /// Serve the sensor board on this serial device (e.g. /dev/ttyUSB1); needs --motor-port.
+    #[arg(long, value_name = "PATH", requires = "motor_port")]
+    pub sensor_port: Option<String>,
+    /// Motor board baud rate (default: the profile's, 115200 for the default robot).
+    #[arg(long, value_name = "BAUD")]
+    pub motor_baud: Option<u32>,
+    /// Sensor board baud rate (default: the profile's, 9600 for the default robot).
+    #[arg(long, value_name = "BAUD")]
+    pub sensor_baud: Option<u32>,
     /// Address the TCP ports bind to.
     #[arg(long, default_value = "127.0.0.1")]
     pub bind: String,
@@ -106,6 +138,14 @@ pub enum OptionsError {
     /// `--tcp BASE` is the last port.
     #[error("--tcp BASE must leave room for BASE+1")]
     TcpBase,
+    /// `--motor-baud` or `--sensor-baud` out of range.
+    #[error("--{which}-baud {baud}: a UART runs at 50 to 4000000 baud")]
+    Baud {
+        /// `motor` or `sensor`.
+        which: &'static str,
+        /// The rate given.
+        baud: u32,
+    },
     /// `--bind` with a port is not a socket address.
     #[error("bad --bind address {bind}: {message}")]
     Bind {
@@ -132,19 +172,35 @@ impl ServeArgs {
                 };
                 Ports::Tcp { motor: addr(base)?, sensor: addr(sensor)? }
             }
-            None => Ports::Pty { dir: self.run_dir.clone() },
+            None => match (&self.motor_port, &self.sensor_port) {
+                (Some(motor), Some(sensor)) => Ports::Serial { motor: motor.clone(), sensor: sensor.clone() },
+                _ => Ports::Pty { dir: self.run_dir.clone() },
+            },
         };
+        for (which, baud) in [("motor", self.motor_baud), ("sensor", self.sensor_baud)] {
+            if let Some(baud) = baud
+                && !(50..=4_000_000).contains(&baud)
+            {
+                return Err(OptionsError::Baud { which, baud });
+            }
+        }
         Ok(ServeOptions {
             ports,
             speed: self.speed,
             duration: self.duration.map(Duration::from_secs_f64),
             status_every: (self.status_every > 0.0).then(|| Duration::from_secs_f64(self.status_every)),
+            motor_baud: self.motor_baud,
+            sensor_baud: self.sensor_baud,
         })
     }
 
     /// What is printed once the ports are open: where the boards are and how to start Carto.
     pub fn ready_text(&self, scenario_name: &str, motor: &str, sensor: &str) -> String {
-        let transport = if self.tcp.is_some() { "tcp" } else { "sim" };
+        let transport = match (self.tcp, &self.motor_port) {
+            (Some(_), _) => "tcp",
+            (None, Some(_)) => "serial (on the machine wired to these ports)",
+            (None, None) => "sim",
+        };
         format!(
             "twin of '{scenario_name}' serving at {}x real time\nmotor board  {motor}\nsensor board {sensor}\nstart Carto with: carto --transport {transport}",
             self.speed
@@ -180,6 +236,8 @@ pub enum BoardPort {
     Pty(PtyLink),
     /// A TCP listener and its current client.
     Tcp(TcpListenerLink, Option<TcpLink>),
+    /// A real serial device.
+    Serial(SerialLink),
 }
 
 impl BoardPort {
@@ -190,6 +248,7 @@ impl BoardPort {
                 None => p.slave_path().display().to_string(),
             },
             BoardPort::Tcp(l, _) => format!("tcp://{}", l.local_addr()),
+            BoardPort::Serial(p) => format!("{} ({} baud)", p.path(), p.baud()),
         }
     }
 }
@@ -224,6 +283,8 @@ impl Link for BoardPort {
                     None => Ok(0),
                 }
             }
+            // A real port that fails is news the caller ends on (see `run_paced`).
+            BoardPort::Serial(p) => p.read(buf),
         }
     }
 
@@ -236,6 +297,7 @@ impl Link for BoardPort {
                 Err(e) if e.is_disconnected() => Ok(buf.len()),
                 other => other,
             },
+            BoardPort::Serial(p) => p.write(buf),
         }
     }
 }
@@ -261,8 +323,11 @@ impl Pacer {
     }
 }
 
-/// Opens both boards' ports.
-pub fn open_ports(ports: &Ports) -> Result<(BoardPort, BoardPort), Error> {
+/// Opens both boards' ports; serial devices at `bauds` (motor, sensor).
+pub fn open_ports(
+    ports: &Ports,
+    (motor_baud, sensor_baud): (u32, u32),
+) -> Result<(BoardPort, BoardPort), Error> {
     Ok(match ports {
         Ports::Pty { dir } => {
             std::fs::create_dir_all(dir)
@@ -275,7 +340,26 @@ pub fn open_ports(ports: &Ports) -> Result<(BoardPort, BoardPort), Error> {
             BoardPort::Tcp(TcpListenerLink::bind(motor)?, None),
             BoardPort::Tcp(TcpListenerLink::bind(sensor)?, None),
         ),
+        Ports::Serial { motor, sensor } => {
+            let open = |which: &str, path: &str, baud: u32| {
+                SerialLink::builder(path, baud)
+                    .open()
+                    .map_err(|e| Error::new(e.kind(), format!("the {which} board's port: {}", e.context())))
+            };
+            (
+                BoardPort::Serial(open("motor", motor, motor_baud)?),
+                BoardPort::Serial(open("sensor", sensor, sensor_baud)?),
+            )
+        }
     })
+}
+
+/// The baud rates served: the options' overrides, else the profile's (motor, sensor).
+pub fn bauds(loaded: &RunSetup, options: &ServeOptions) -> (u32, u32) {
+    (
+        options.motor_baud.unwrap_or(loaded.profile.serial.motor_baud),
+        options.sensor_baud.unwrap_or(loaded.profile.serial.sensor_baud),
+    )
 }
 
 /// Runs the twin in real time, paced by `clock`, until `stop` is set or the duration is over.
@@ -293,7 +377,7 @@ pub fn serve(
     ready: impl FnOnce(&str, &str),
     status: impl FnMut(Instant, &Twin),
 ) -> Result<(), Error> {
-    let (motor, sensor) = open_ports(&options.ports)?;
+    let (motor, sensor) = open_ports(&options.ports, bauds(loaded, options))?;
     ready(&motor.describe(), &sensor.describe());
     let Some(publisher) = publisher else {
         return run_paced(loaded, seed, options, clock, stop, (motor, sensor), status, |_| {}, |_, _| {});
@@ -330,8 +414,9 @@ fn run_paced<M: Link, S: Link>(
     let dt = loaded.dt();
     let dt_s = dt.as_secs_f64();
     let mut twin = Twin::new(loaded, seed, dt);
-    let mut motor_pacer = Pacer::new(loaded.profile.serial.motor_baud);
-    let mut sensor_pacer = Pacer::new(loaded.profile.serial.sensor_baud);
+    let (motor_baud, sensor_baud) = bauds(loaded, options);
+    let mut motor_pacer = Pacer::new(motor_baud);
+    let mut sensor_pacer = Pacer::new(sensor_baud);
     let mut now = Instant::ZERO;
     let mut next_status = options.status_every.map(|d| Instant::ZERO + d);
     let speed = options.speed.max(1e-6);
@@ -352,6 +437,16 @@ fn run_paced<M: Link, S: Link>(
             before(now);
             let budget = WriteBudget { motor: motor_pacer.tick(dt), sensor: sensor_pacer.tick(dt) };
             let io = twin.board_io(now, &mut motor, &mut sensor, budget);
+            // Only a real serial port reports a failure here (a pty or TCP client leaving is not one).
+            if let Ports::Serial { motor, sensor } = &options.ports
+                && !(io.motor_up && io.sensor_up)
+            {
+                let (which, path) = if io.motor_up { ("sensor", sensor) } else { ("motor", motor) };
+                return Err(Error::new(
+                    ErrorKind::Disconnected,
+                    format!("the {which} board's serial port {path} stopped working (adapter unplugged?)"),
+                ));
+            }
             motor_pacer.spend(io.motor_sent);
             sensor_pacer.spend(io.sensor_sent);
             twin.physics_step(now);
@@ -370,4 +465,59 @@ fn run_paced<M: Link, S: Link>(
         std::thread::sleep(std::time::Duration::from_millis(1));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        serve: ServeArgs,
+    }
+
+    fn parse(args: &[&str]) -> Result<ServeArgs, clap::Error> {
+        Cli::try_parse_from([&["sim", "--serve"], args].concat()).map(|c| c.serve)
+    }
+
+    #[test]
+    fn serial_devices_and_baud_overrides_become_the_options() {
+        let args = parse(&[
+            "--motor-port",
+            "/dev/ttyUSB0",
+            "--sensor-port",
+            "/dev/ttyUSB1",
+            "--sensor-baud",
+            "19200",
+        ])
+        .unwrap();
+        let options = args.options().unwrap();
+        assert!(
+            matches!(&options.ports, Ports::Serial { motor, sensor } if motor == "/dev/ttyUSB0" && sensor == "/dev/ttyUSB1")
+        );
+        assert_eq!((options.motor_baud, options.sensor_baud), (None, Some(19200)));
+        let loaded = RunSetup::builtin_default().unwrap();
+        assert_eq!(bauds(&loaded, &options), (115_200, 19_200));
+        assert!(args.ready_text("default", "m", "s").contains("--transport serial"));
+    }
+
+    #[test]
+    fn one_serial_device_alone_or_with_tcp_and_a_bad_baud_are_refused() {
+        assert!(parse(&["--motor-port", "/dev/ttyUSB0"]).is_err());
+        assert!(parse(&["--motor-port", "/dev/a", "--sensor-port", "/dev/b", "--tcp", "5000"]).is_err());
+        let args = parse(&["--motor-baud", "0"]).unwrap();
+        assert_eq!(args.options().unwrap_err(), OptionsError::Baud { which: "motor", baud: 0 });
+    }
+
+    #[test]
+    fn a_missing_device_is_not_found_naming_the_board_and_the_path() {
+        let ports =
+            Ports::Serial { motor: "/dev/ttyUSB-explobot-missing".into(), sensor: "/dev/null".into() };
+        let err = open_ports(&ports, (115_200, 9600)).err().unwrap();
+        assert_eq!(err.kind(), ErrorKind::NotFound);
+        let text = err.to_string();
+        assert!(text.contains("motor board") && text.contains("/dev/ttyUSB-explobot-missing"), "{text}");
+    }
 }

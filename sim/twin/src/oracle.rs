@@ -37,19 +37,9 @@ use robot_model::grid::GridFrame;
 
 use crate::scenario::{Obstacle, Scenario};
 
-/// What a run gives Carto beyond its own sensors (module docs). Anything but [`Oracle::None`] is
-/// an analysis, never the robot's result.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-pub enum Oracle {
-    /// Nothing: what the robot achieves.
-    #[default]
-    None,
-    /// Every surface of the room, before the run (`--known-room`).
-    Room,
-    /// Every point the sonar has heard so far, where it really lies, never forgotten
-    /// (`--known-echoes`).
-    Echoes,
-}
+/// What a run gives Carto beyond its own sensors (module docs); defined beside the recording
+/// format, which stores it.
+pub use transport::recording::Oracle;
 
 /// Spacing of the points along every surface, metres: under the 2 cm clearance Carto keeps.
 pub const SPACING_M: f64 = 0.01;

@@ -25,10 +25,19 @@ pub enum ReplayError {
     /// The recorded profile no longer loads.
     #[error("the recording's robot profile: {0}")]
     Profile(#[from] ProfileError),
+    /// A recording made on the robot (`carto --record`): bytes without a scenario to re-run.
+    #[error("{label}: recorded by carto on the robot, with no scenario: it cannot be re-run")]
+    NoScenario {
+        /// The recording's label.
+        label: String,
+    },
 }
 
 /// The recorded run's scenario with the recorded profile.
 pub fn rebuild(rec: &Recording) -> Result<RunSetup, ReplayError> {
+    if rec.scenario_ron.trim().is_empty() {
+        return Err(ReplayError::NoScenario { label: rec.scenario_label.clone() });
+    }
     let scenario = Scenario::from_ron_str(&rec.scenario_ron, &rec.scenario_label)?;
     let profile = RobotProfile::from_ron_str(&rec.profile_ron, "<recorded profile>")?;
     let loaded = RunSetup::with_profile(scenario, profile, &rec.scenario_ron, &rec.scenario_label)?;

@@ -23,6 +23,7 @@ mod measured_rooms;
 mod processes;
 mod readme;
 mod recording;
+mod serial_hil;
 mod slow_link;
 mod sweep;
 mod uart_budget;

@@ -1,8 +1,10 @@
-//! Processes and clients for the multi-process tests (`daemon.rs`, `serve_e2e.rs`): the served
-//! twin, the `carto` binary, a link-protocol client, scratch folders, all cleaned up on drop.
+//! Processes and clients for the multi-process tests (`daemon.rs`, `serial_hil.rs`,
+//! `serve_e2e.rs`): the served twin, the `carto` binary, a link-protocol client, our Cute without
+//! its window, pty pairs made by `socat`, scratch folders, all cleaned up on drop.
 
 #![allow(dead_code)]
 
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader};
 use std::net::TcpListener;
 use std::path::{Path, PathBuf};
@@ -10,8 +12,10 @@ use std::process::{Child, Command, Output, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use cute::{Cute, CuteConfig, CuteRuntime};
 use protocol::link::{Decoder, GuiMessage, MsgOrder};
-use transport::{Link, TcpLink};
+use robot_model::grid::Heading;
+use transport::{Clock, Link, TcpConnector, TcpLink, WallClock};
 
 /// Kills the child process when dropped, so a failing test leaves nothing running.
 pub struct Guard(pub Child);
@@ -115,10 +119,19 @@ impl Twin {
 
     /// On ports `base` (motor) and `base + 1` (sensor); returns once it serves.
     pub fn start_on(dir: &TempDir, base: u16, status_every: f64) -> Twin {
+        let mut args: Vec<OsString> =
+            ["scenarios/empty.ron", "--tcp", &base.to_string()].map(Into::into).into();
+        args.extend(["--status-every".into(), status_every.to_string().into(), "--run-dir".into()]);
+        args.push(dir.0.join("run").into());
+        Self::serve(base, &args)
+    }
+
+    /// `explobot sim --serve ARGS` (scenario and ports in `args`); `base` is its TCP base port, if
+    /// any. Returns once it serves.
+    pub fn serve(base: u16, args: &[OsString]) -> Twin {
         let mut child = Command::new(binary("explobot"))
-            .args(["sim", "scenarios/empty.ron", "--serve", "--tcp", &base.to_string()])
-            .args(["--status-every", &status_every.to_string(), "--run-dir"])
-            .arg(dir.0.join("run"))
+            .args(["sim", "--serve"])
+            .args(args)
             .current_dir(workspace_root())
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -183,11 +196,26 @@ pub struct Carto {
 
 impl Carto {
     pub fn start(dir: &TempDir, motor: u16, sensor: u16, extra: &[&str]) -> Carto {
+        let motor = format!("127.0.0.1:{motor}");
+        let sensor = format!("127.0.0.1:{sensor}");
+        Self::start_on(dir, "tcp", (Path::new(&motor), Path::new(&sensor)), extra)
+    }
+
+    /// On the boards at `motor` and `sensor` (device paths, or HOST:PORT with `tcp`) reached with
+    /// `--transport transport`.
+    pub fn start_on(
+        dir: &TempDir,
+        transport: &str,
+        (motor, sensor): (&Path, &Path),
+        extra: &[&str],
+    ) -> Carto {
         let port = free_port();
         let log = dir.0.join(format!("carto-{port}.log"));
         let child = Command::new(binary("carto"))
-            .args(["--transport", "tcp", "--motor-port", &format!("127.0.0.1:{motor}")])
-            .args(["--sensor-port", &format!("127.0.0.1:{sensor}")])
+            .args(["--transport", transport, "--motor-port"])
+            .arg(motor)
+            .arg("--sensor-port")
+            .arg(sensor)
             .args(["--listen", &format!("127.0.0.1:{port}"), "--profile", "scenarios/robots/mecanum-4wd.ron"])
             .args(["--cell", "0.30"]) // scenarios/empty.ron is drawn for 0.30 m cells
             .args(extra)
@@ -234,6 +262,77 @@ impl Carto {
     /// Waits up to `limit` for Carto to exit; its exit code.
     pub fn wait_exit(&mut self, limit: Duration) -> Option<i32> {
         wait_for("carto to exit", limit, || self.try_exit())
+    }
+}
+
+/// Our Cute, the library's session without its window, connected to a `carto` over TCP on the
+/// wall clock, as the `cute` binary runs it.
+pub struct CuteClient {
+    runtime: CuteRuntime<TcpConnector>,
+    clock: WallClock,
+}
+
+impl CuteClient {
+    /// A session on a `rows` × `cols` map, the robot in cell (0, 0) facing east, dialling `port`.
+    pub fn connect(port: u16, rows: usize, cols: usize) -> CuteClient {
+        let config =
+            CuteConfig { rows, cols, start: (0, 0), heading: Heading::East, ..CuteConfig::default() };
+        let connector = TcpConnector::new(format!("127.0.0.1:{port}")).timeout(Duration::from_millis(200));
+        CuteClient {
+            runtime: CuteRuntime::new(Cute::new(config).unwrap(), connector),
+            clock: WallClock::start(),
+        }
+    }
+
+    /// Starts cartography as soon as Carto acknowledges the position and runs it until `moves`
+    /// moves are done (or the room is mapped); panics after `limit`.
+    pub fn map_for(&mut self, moves: u64, limit: Duration) -> &Cute {
+        let deadline = Instant::now() + limit;
+        let mut started = false;
+        loop {
+            let now = self.clock.now();
+            self.runtime.step_with(now, |cute| {
+                if !started && cute.is_ready() {
+                    cute.start_cartography().unwrap();
+                    started = true;
+                }
+            });
+            let cute = self.runtime.cute();
+            if started && (cute.counters().moves_done >= moves || cute.cartographer().is_none()) {
+                return self.runtime.cute();
+            }
+            assert!(
+                Instant::now() < deadline,
+                "cartography did not make {moves} moves within {limit:?}: {:?}\n{}",
+                cute.counters(),
+                cute.map().to_text()
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+    }
+}
+
+/// A pair of connected pseudo-terminals made by `socat`, at `DIR/a` and `DIR/b`: two serial
+/// device paths wired to each other, as two USB-serial adapters with crossed TX and RX.
+pub struct SerialPair {
+    pub a: PathBuf,
+    pub b: PathBuf,
+    _socat: Guard,
+}
+
+impl SerialPair {
+    pub fn new(dir: &TempDir, a: &str, b: &str) -> SerialPair {
+        let (a, b) = (dir.0.join(a), dir.0.join(b));
+        let end = |p: &Path| format!("pty,raw,echo=0,link={}", p.display());
+        let socat = Command::new("socat")
+            .args(["-d", "-d", &end(&a), &end(&b)])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("socat is missing: apt-get install socat (.ci/run installs it)");
+        let socat = Guard(socat);
+        wait_for("socat's ptys", Duration::from_secs(10), || (a.exists() && b.exists()).then_some(()));
+        SerialPair { a, b, _socat: socat }
     }
 }
 
