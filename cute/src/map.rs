@@ -416,10 +416,10 @@ impl Map {
         if ahead == from {
             return Refusal::Nothing;
         }
-        if value.is_known_free() {
-            if let Ok(new) = self.block_move(from, ahead) {
-                return Refusal::MoveBlocked { new };
-            }
+        if value.is_known_free()
+            && let Ok(new) = self.block_move(from, ahead)
+        {
+            return Refusal::MoveBlocked { new };
         }
         match self.set_obstacle(usize::from(ahead.0), usize::from(ahead.1)) {
             Ok(()) => Refusal::Obstacle,

@@ -74,6 +74,9 @@ const MAX_SIDE: f32 = 4096.0;
 /// Border around the room, pixels.
 const BORDER: u32 = 12;
 
+/// A move between two neighbouring cells, `(row, col)` from and to.
+pub type CellMove = ((u8, u8), (u8, u8));
+
 /// What to draw.
 pub struct MapPicture<'a> {
     /// The room.
@@ -83,7 +86,7 @@ pub struct MapPicture<'a> {
     /// Cute's knowledge per cell, row-major: `Some(true)` free, `Some(false)` obstacle.
     pub known: &'a [Option<bool>],
     /// Moves Cute's map records as blocked: pairs of neighbouring `(row, col)` cells.
-    pub blocked_moves: &'a [((u8, u8), (u8, u8))],
+    pub blocked_moves: &'a [CellMove],
     /// The robot's true trail, world metres.
     pub trail: &'a [(f32, f32)],
     /// Where Carto believed the robot was, sampled with the true trail, world metres.

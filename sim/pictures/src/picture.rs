@@ -60,7 +60,7 @@ pub fn dashed_polyline(img: &mut RgbImage, points: &[(f32, f32)], color: [u8; 3]
         let n = length.ceil().max(1.0) as u32;
         for i in 0..n {
             let t = i as f32 / n as f32;
-            if ((travelled + length * t) / dash) as u64 % 2 == 0 {
+            if (((travelled + length * t) / dash) as u64).is_multiple_of(2) {
                 let (x, y) = (x0 + dx * t, y0 + dy * t);
                 for (ox, oy) in [(0.0, 0.0), (0.5, 0.0), (0.0, 0.5)] {
                     put(img, (x + ox).floor(), (y + oy).floor(), color);

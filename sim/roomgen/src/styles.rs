@@ -382,7 +382,7 @@ pub(super) fn irregular_outline(rng: &mut ChaCha8Rng) -> Vec<Pt> {
         let (w, h) = (uniform(rng, 2.0, 7.5), uniform(rng, 2.0, 7.0));
         let corner_pts = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
         // Side i runs from corner i to corner i + 1; its length is w for even i, h for odd i.
-        let side_len = |i: usize| if i % 2 == 0 { w } else { h };
+        let side_len = |i: usize| if i.is_multiple_of(2) { w } else { h };
         let mut cuts = [CornerCut::None; 4];
         let count = rng.random_range(1..=3usize);
         let mut notched = false;

@@ -328,15 +328,14 @@ impl Lockstep {
             self.note_contact(now);
             self.belief.contact();
         }
-        if self.twin.trail().len() != trail_points {
-            if let Some(point) = self
+        if self.twin.trail().len() != trail_points
+            && let Some(point) = self
                 .carto
                 .carto()
                 .believed_pose()
                 .and_then(|(pose, offset)| carto_belief(&self.truth.frame, pose, offset))
-            {
-                self.believed_trail.push(point);
-            }
+        {
+            self.believed_trail.push(point);
         }
         // Headless, this is the run's last step; in an interactive run it happens once and the
         // run goes on.

@@ -157,7 +157,7 @@ impl RunSetup {
         let at = |path: &[Key], message: String| ScenarioError::at(label, text, path, message);
         let mut profile = match &scenario.robot {
             None => RobotProfile::default(),
-            Some(rel) => RobotProfile::load(&base.join(rel))
+            Some(rel) => RobotProfile::load(base.join(rel))
                 .map_err(|e| at(&[field("robot")], format!("robot profile: {e}")))?,
         };
         // The overrides must leave a valid robot (a negative friction would break the physics):

@@ -362,7 +362,7 @@ pub fn belief_scene(belief: &BeliefEllipse, length_m: f32, ns: u64) -> SceneUpda
         (line_primitive::Type::LineStrip, outline),
         (line_primitive::Type::LineList, vec![point(x, y, 0.12), point(tip.0, tip.1, 0.12)]),
     ] {
-        let mut l = line(kind, points, 0.006, orange.clone());
+        let mut l = line(kind, points, 0.006, orange);
         l.pose = None;
         scene.lines.push(l);
     }

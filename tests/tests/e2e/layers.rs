@@ -1,5 +1,6 @@
 //! The twin library's dependency tree holds no Bevy, clap, image or foxglove crate (issue 41):
 //! `cargo tree -p twin -e normal`, as a user would check it.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::process::Command;
 

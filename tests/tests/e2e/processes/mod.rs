@@ -1,7 +1,7 @@
 //! Processes and clients for the multi-process tests (`daemon.rs`, `serial_hil.rs`,
 //! `serve_e2e.rs`): the served twin, the `carto` binary, a link-protocol client, our Cute without
 //! its window, pty pairs made by `socat`, scratch folders, all cleaned up on drop.
-
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 #![allow(dead_code)]
 
 use std::ffi::OsString;
