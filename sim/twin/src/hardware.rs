@@ -3,7 +3,7 @@
 //!
 //! Both runtimes use it: the lockstep runner gives it in-memory links on a virtual clock
 //! ([`crate::runner`]); `explobot sim --serve` gives it pseudo-terminals or TCP sockets and the
-//! wall clock ([`explobot::serve`]).
+//! wall clock (`explobot::serve`).
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;

@@ -1,4 +1,4 @@
-//! One rasteriser for the true room: `map.png` ([`twin_pictures::mapimg`]) and the window's floor
+//! One rasteriser for the true room: `map.png` (`twin_pictures::mapimg`) and the window's floor
 //! texture (`twin_app::window`) both colour pixels by what lies under their centres.
 //!
 //! Concept: [`RoomShapes`] answers "outside the walls, on an obstacle, or floor?" for a world
