@@ -3,7 +3,7 @@
 //! Concept: [`Owed`] is the sim time owed to the wall clock. Each pass adds the wall time since
 //! the last one times the speed, the caller runs [`Owed::steps`] whole steps of `dt` (or fewer)
 //! and reports them with [`Owed::ran`]; the remainder carries to the next pass. Both real-time
-//! runtimes use it: `explobot sim --serve` ([`explobot::serve`]) at a fixed speed, and the window
+//! runtimes use it: `explobot sim --serve` (`explobot::serve`) at a fixed speed, and the window
 //! through [`Pacing`], which adds pause, single steps, `Max` and a stop time.
 //!
 //! Invariants: nothing here reads a clock (callers pass the wall time); what is owed never
