@@ -34,7 +34,7 @@
 //!     off_heading_deg: 0.0,
 //! };
 //! let (cx, cy) = frame.cell_center(0, 0);
-//! t.sample(3.0, &frame, belief, Pose2::new(cx + 0.05, cy, 0.0), true);
+//! t.sample(3.0, &frame, (belief, None), Pose2::new(cx + 0.05, cy, 0.0), true);
 //! let r = t.report();
 //! assert!((r.error_max_m - 0.03).abs() < 1e-6);
 //! assert!((r.stop_offset_max_m - 0.05).abs() < 1e-6);
@@ -96,8 +96,16 @@ pub struct BeliefTracker {
 impl BeliefTracker {
     /// Compares Carto's `belief` with the true `body` at sim time `t_s`; `move_done` also
     /// samples the stop offset. A belief whose cell is off the grid counts as the distance to
-    /// nothing: it is skipped.
-    pub fn sample(&mut self, t_s: f64, frame: &GridFrame, belief: Belief, body: Pose2, move_done: bool) {
+    /// nothing: it is skipped. `covariance` is the filter's position covariance (m², world
+    /// axes), logged with the sample at trace level.
+    pub fn sample(
+        &mut self,
+        t_s: f64,
+        frame: &GridFrame,
+        (belief, covariance): (Belief, Option<[[f64; 2]; 2]>),
+        body: Pose2,
+        move_done: bool,
+    ) {
         let Some((bx, by)) = carto_belief(frame, belief.pose, belief.offset) else { return };
         let error = f64::from((body.x - bx).hypot(body.y - by));
         let believed_heading =
@@ -127,6 +135,9 @@ impl BeliefTracker {
         let (ex, ey) = (f64::from(body.x) - f64::from(bx), f64::from(body.y) - f64::from(by));
         let th = f64::from(body.theta);
         let (e_along, e_across) = (ex * th.cos() + ey * th.sin(), -ex * th.sin() + ey * th.cos());
+        // the filter's covariance, for checking its ellipse against the truth (journal,
+        // world-model "Round 5", `ellipse.py`); NaN before its first reading
+        let [[sxx, sxy], [_, syy]] = covariance.unwrap_or([[f64::NAN; 2]; 2]);
         tracing::trace!(
             t_s,
             error,
@@ -136,6 +147,11 @@ impl BeliefTracker {
             th,
             bx,
             by,
+            ex,
+            ey,
+            sxx,
+            sxy,
+            syy,
             move_done,
             "Carto's belief against the truth"
         );
@@ -203,7 +219,7 @@ mod tests {
             offset: CellOffset::default(),
             off_heading_deg: 4.0,
         };
-        t.sample(1.0, &frame, belief, Pose2::new(cx, cy, 95f32.to_radians()), false);
+        t.sample(1.0, &frame, (belief, None), Pose2::new(cx, cy, 95f32.to_radians()), false);
         let r = t.report();
         assert!((r.heading_error_max_deg - 1.0).abs() < 1e-3, "{r:?}");
         assert_eq!(r.stop_offset_max_m, 0.0, "no MOVE_DONE, no stop offset");
@@ -222,7 +238,7 @@ mod tests {
             if i == 3 {
                 t.contact(); // a second contact, judged two MOVE_DONEs later: never
             }
-            t.sample(i as f64, &frame, belief, Pose2::new(cx + off, cy, 0.0), *done);
+            t.sample(i as f64, &frame, (belief, None), Pose2::new(cx + off, cy, 0.0), *done);
         }
         let r = t.report();
         assert_eq!((r.after_contact, r.after_contact_unrecovered), (1, 1), "{r:?}");
@@ -236,7 +252,7 @@ mod tests {
         let mut t = BeliefTracker::default();
         for i in 0..20 {
             let off = if i == 7 { 0.10 } else { 0.01 };
-            t.sample(f64::from(i), &frame, belief, Pose2::new(cx + off, cy, 0.0), false);
+            t.sample(f64::from(i), &frame, (belief, None), Pose2::new(cx + off, cy, 0.0), false);
         }
         let r = t.report();
         assert_eq!(r.samples, 20);

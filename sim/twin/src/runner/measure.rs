@@ -43,7 +43,7 @@ impl Lockstep {
             self.belief.sample(
                 now.as_secs_f64(),
                 &self.truth.frame,
-                belief,
+                (belief, self.carto.carto().position_covariance()),
                 self.twin.body().pose(),
                 move_ended,
             );
