@@ -41,12 +41,21 @@ fn display_ready(test: &str) -> bool {
         println!("SKIPPED {test}: no display (DISPLAY is unset); run under xvfb-run");
         return false;
     }
-    let xdotool = Command::new("xdotool").arg("version").output();
-    assert!(
-        xdotool.is_ok_and(|o| o.status.success()),
-        "{test}: xdotool is missing: apt-get install -y xdotool (.ci/run does)"
-    );
-    true
+    // Installed, and able to reach the display: a busy X server (the other test's window
+    // starting) may refuse a connection for a moment, so a failed run is tried again.
+    let mut failed = String::new();
+    for _ in 0..5 {
+        match Command::new("xdotool").arg("version").output() {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                panic!("{test}: xdotool is missing: apt-get install -y xdotool (.ci/run does)")
+            }
+            Err(e) => failed = e.to_string(),
+            Ok(o) if o.status.success() => return true,
+            Ok(o) => failed = format!("{}: {}", o.status, String::from_utf8_lossy(&o.stderr).trim()),
+        }
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    panic!("{test}: xdotool cannot reach the display {:?}: {failed}", std::env::var_os("DISPLAY"))
 }
 
 /// The window process, killed when dropped (a failing test leaves no window behind).
