@@ -332,10 +332,7 @@ impl Localiser {
     /// The standard deviation of the position, metres (the larger axis); `None` before the first
     /// reading.
     pub fn sigma_m(&self) -> Option<f64> {
-        self.filter.as_ref().map(|(f, ..)| {
-            let p = f.covariance();
-            p[(0, 0)].max(p[(1, 1)]).sqrt()
-        })
+        self.position_covariance().map(|p| p[0][0].max(p[1][1]).sqrt())
     }
 
     /// The covariance of the position, m², in Carto's metric frame (`[[xx, xy], [xy, yy]]`), as
