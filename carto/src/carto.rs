@@ -40,6 +40,7 @@ use robot_model::time::Instant;
 mod view;
 
 use crate::CartoConfig;
+use crate::calibration::CalibrationDrive;
 use crate::log_limited;
 use crate::motor::{Drive, Motor};
 use crate::pilot::{Health, Io, Pilot, Request};
@@ -184,6 +185,8 @@ pub struct Carto {
     sensor_link_up: bool,
     limiter: RateLimiter,
     stats: CartoStats,
+    /// The calibration drive, while it runs in place of the pilot.
+    calibration: Option<CalibrationDrive>,
 }
 
 impl Carto {
@@ -209,6 +212,7 @@ impl Carto {
             sensor_link_up: true,
             limiter: RateLimiter::new(robot_model::time::Duration::from_secs(1)),
             stats: CartoStats::default(),
+            calibration: None,
             cfg,
         }
     }
@@ -401,6 +405,16 @@ impl Carto {
             );
             self.pilot.on_fault(now, &mut self.motor, "sensor board lost");
         }
+        if let Some(drive) = self.calibration.as_mut() {
+            if let Some(d) = drive.poll(now)
+                && self.motor_link_up
+            {
+                self.motor_out.extend(wire::encode_drive(d, self.cfg.speed_ratio));
+                self.stats.drive_frames_out += 1;
+            }
+            log_suppressed(self.limiter.drain(now));
+            return;
+        }
         let turning = self.motor.is_turning(now);
         self.sensors.smooth_yaw(&self.cfg, turning);
         self.sensors.estimate_imu_drift(now, &self.cfg, turning);
@@ -431,6 +445,20 @@ impl Carto {
         }
     }
 
+    /// Starts the calibration drive ([`crate::calibration`]) at `now`: from then on Carto sends
+    /// its drives instead of the pilot's, and the pilot waits (a client's requests queue) until
+    /// it is over.
+    pub fn start_calibration_drive(&mut self, now: Instant) {
+        self.motor.stop(now);
+        self.flush_motor();
+        self.calibration = Some(CalibrationDrive::new(now));
+    }
+
+    /// Whether a calibration drive ran and is over (its final stop handed out).
+    pub fn calibration_done(&self) -> bool {
+        self.calibration.as_ref().is_some_and(CalibrationDrive::is_done)
+    }
+
     /// The latest time [`Carto::poll`] must next run, for a caller that sleeps between events
     /// (the binary's event loop): `now` while a move, a task or a drive other than zero is in
     /// progress (the control loop wants every poll), otherwise the earliest of the keep-state
@@ -438,6 +466,9 @@ impl Carto {
     /// rate-limiter window. Bytes arriving on a link are a reason to poll sooner, which the
     /// caller sees itself. Read-only: it changes nothing Carto does.
     pub fn next_deadline(&self, now: Instant) -> Instant {
+        if self.calibration.as_ref().is_some_and(|c| !c.is_done()) {
+            return now;
+        }
         if self.pilot.is_busy()
             || self.motor.is_busy()
             || self.motor.is_turning(now)

@@ -2,6 +2,7 @@
 #![warn(missing_docs)]
 
 pub mod backoff;
+pub mod calibration;
 mod carto;
 pub mod config;
 pub mod estimate;

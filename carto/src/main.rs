@@ -120,11 +120,18 @@ struct Args {
     /// Seconds between two rewrites of the recording: what a power cut may lose.
     #[arg(long, value_name = "SECONDS", default_value_t = 10.0, requires = "record")]
     record_flush: f64,
+    /// Drive the calibration plan (`carto::calibration`, about a minute) as soon as both boards answer,
+    /// then stop the motors and exit 0. With --record, the recording `explobot calibrate` fits
+    /// a profile to. Stand the robot 1.5 m from a flat wall, facing it.
+    #[arg(long)]
+    calibration_drive: bool,
 }
 
 /// Why the main loop ended.
 enum Ended {
     Signal(usize),
+    /// `--calibration-drive` is over.
+    CalibrationDone,
     Fatal(String),
 }
 
@@ -180,6 +187,7 @@ fn main() -> ExitCode {
     let (why, code, emergency) = match outcome {
         Ok(Ended::Signal(sig)) => (format!("signal {}", signal_name(sig)), signal_exit_code(sig), false),
         Ok(Ended::Fatal(why)) => (why, EXIT_FATAL, false),
+        Ok(Ended::CalibrationDone) => ("calibration drive done".to_owned(), 0, false),
         Err(_) => ("internal error (panic)".to_owned(), EXIT_PANIC, true),
     };
     let drained = daemon.stop_motors(emergency);
@@ -393,6 +401,8 @@ struct Daemon {
     /// Read end of the pipe every stop signal writes a byte to: wakes `poll`.
     wake: UnixStream,
     exit_on_link_loss: bool,
+    /// `--calibration-drive`: whether it has started.
+    calibration: Option<bool>,
 }
 
 impl Daemon {
@@ -469,7 +479,17 @@ impl Daemon {
         let listener = TracedListener::new(listener, record.as_ref().map(|r| (r.recorder.feed(), clock)));
         let mut rt = CartoRuntime::with_links(Carto::new(cfg), listener, motor, sensor, clock.now());
         rt.set_drain_on_close(DRAIN_ON_CLOSE);
-        Ok(Daemon { rt, clock, record, boards, signal, wake, exit_on_link_loss: args.exit_on_link_loss })
+        let calibration = args.calibration_drive.then_some(false);
+        Ok(Daemon {
+            rt,
+            clock,
+            record,
+            boards,
+            signal,
+            wake,
+            exit_on_link_loss: args.exit_on_link_loss,
+            calibration,
+        })
     }
 
     /// Serves until a signal or a fatal error.
@@ -481,6 +501,21 @@ impl Daemon {
                 return Ended::Signal(sig);
             }
             let now = self.clock.now();
+            match self.calibration {
+                // both boards answer: the motor link is open and the IMU has reported
+                Some(false) if self.rt.motor_up() && self.rt.carto().status().yaw_deg.is_some() => {
+                    tracing::info!(
+                        seconds = carto::calibration::CalibrationDrive::length().as_secs_f64(),
+                        "calibration drive starts"
+                    );
+                    self.rt.carto_mut().start_calibration_drive(now);
+                    self.calibration = Some(true);
+                }
+                Some(true) if self.rt.carto().calibration_done() && !self.rt.has_pending_output() => {
+                    return Ended::CalibrationDone;
+                }
+                _ => {}
+            }
             let report = self.rt.step(now);
             let waiting = report.waiting;
             for (lost, b) in [(report.motor_lost, 0), (report.sensor_lost, 1)] {

@@ -50,6 +50,20 @@ pub struct ReplayArgs {
     /// Compress the MCAP file's chunks with lz4.
     #[arg(long, requires = "mcap")]
     pub mcap_lz4: bool,
+    /// Instead of re-running Carto: play the recorded drive commands into the twin and report
+    /// how far each sensor stream of the twin is from the recorded one (a recording of
+    /// `carto --calibration-drive`; `explobot calibrate` fits a profile to it).
+    #[arg(long, conflicts_with = "mcap")]
+    pub compare: bool,
+    /// With --compare: a profile to compare (repeat for several; default the built-in robot).
+    #[arg(long, value_name = "FILE", requires = "compare")]
+    pub profile: Vec<PathBuf>,
+    /// With --compare: the room the drive ran in (default: the built-in calibration room).
+    #[arg(long, value_name = "SCENARIO", requires = "compare")]
+    pub room: Option<PathBuf>,
+    /// With --compare: also draw the heading and range errors over time as an SVG file.
+    #[arg(long, value_name = "FILE", requires = "compare")]
+    pub plot: Option<PathBuf>,
 }
 
 /// `--style`: a kind of room (the values of [`RoomStyle`]).

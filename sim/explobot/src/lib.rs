@@ -2,6 +2,7 @@
 
 pub mod args;
 pub mod bench;
+pub mod calibrate;
 pub mod output;
 pub mod runlog;
 pub mod serve;

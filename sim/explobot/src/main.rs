@@ -55,6 +55,9 @@ enum Command {
     /// Print throughput figures: physics steps/s (sonar off, per cycle, every step) and full-stack
     /// real-time factor per scenario.
     Bench(BenchArgs),
+    /// Fit a robot profile to a recording of the calibration drive (`carto --calibration-drive
+    /// --record FILE`): each value with its uncertainty, the fit's residual, the fitted profile.
+    Calibrate(explobot::calibrate::CalibrateArgs),
     /// Check scenario files (syntax, values, start cell) without running them.
     Check {
         /// Scenario files.
@@ -105,7 +108,19 @@ fn main() -> ExitCode {
             output::print_stdout(&format!("{}\n", wiretool::to_hex(&bytes)))?;
             Ok(ExitCode::SUCCESS)
         }),
+        Command::Replay(args) if args.compare => explobot::calibrate::compare(
+            &args.recording,
+            &args.profile,
+            args.room.as_deref(),
+            args.plot.as_deref(),
+        )
+        .and_then(|text| output::print_stdout(&text).map_err(anyhow::Error::from))
+        .map(|()| ExitCode::SUCCESS),
         Command::Replay(args) => replay(&args.recording, args.mcap.as_deref().map(|p| (p, args.mcap_lz4))),
+        Command::Calibrate(args) => args
+            .run()
+            .and_then(|text| output::print_stdout(&text).map_err(anyhow::Error::from))
+            .map(|()| ExitCode::SUCCESS),
         Command::Bench(args) => bench_cmd(&args),
         Command::Check { scenarios } => check(&scenarios),
         Command::Generate(args) => args.run().map(|()| ExitCode::SUCCESS).map_err(anyhow::Error::from),

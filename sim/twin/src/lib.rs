@@ -2,6 +2,7 @@
 
 pub mod belief;
 pub mod body;
+pub mod calibrate;
 pub mod carto_map;
 pub mod counts;
 pub mod drive;

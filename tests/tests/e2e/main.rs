@@ -5,6 +5,7 @@
 //! (`tests/serve_e2e.rs`, which must not share the CPU with this binary's other tests), and the
 //! fuzz seed check (`tests/carto_fuzz_seeds.rs`, run by name by `carto/fuzz/seed-corpus.sh`).
 
+mod calibration;
 mod carto_twin;
 mod cli;
 mod compat_cute;
