@@ -103,8 +103,6 @@ pub struct Fitted {
     pub values: Vec<Estimate>,
     /// Values read off the recording: the dead band, the IMU's drift and noise, the sonar's noise.
     pub readings: Vec<Estimate>,
-    /// The sonar's noise, cm.
-    pub sonar_noise: Estimate,
     /// The link's round trip, seconds.
     pub lag_s: f64,
     /// The residuals at the fit.
@@ -192,29 +190,28 @@ impl CostFunction for &Problem<'_> {
 /// Fits `base`'s [`PARAMS`] to `rec`, replayed in `room` (module docs).
 pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitted, CalibrateError> {
     let sigmas = Sigmas::of(base);
+    // 1. read off directly; the fit starts from the base with these values
     let mut readings = Vec::new();
-    let mut start = base.clone();
+    let mut seeded = base.clone();
     if let Some(db) = dead_band(rec, base) {
-        start.motor.dead_band_percent = db.value as f32;
+        seeded.motor.dead_band_percent = db.value as f32;
         readings.push(db);
     }
     let (drift, imu_noise) = drift_and_noise(rec, base);
     if let Some(d) = drift {
-        start.imu.drift_deg_per_min = d.value as f32;
+        seeded.imu.drift_deg_per_min = d.value as f32;
         readings.push(d);
     }
     readings.extend(imu_noise.clone());
-    let base_in = base;
-    let base = &start;
     let all = Problem {
         room,
-        base,
+        base: &seeded,
         rec,
         sigmas,
         free: (0..PARAMS.len()).collect(),
         evaluations: std::cell::Cell::new(0),
     };
-    // 1. observability, at the base and a first round trip of 20 ms
+    // 2. observability, at the base and a first round trip of 20 ms
     let lag0 = 0.02 / LAG_SCALE_S;
     let x0: Vec<f64> = (0..PARAMS.len()).map(|_| 1.0).chain([lag0]).collect();
     let cost_base = all.weighted(&x0)?.norm_squared();
@@ -224,7 +221,7 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
     let problem =
         Problem { free: free.clone(), evaluations: std::cell::Cell::new(all.evaluations.get()), ..all };
 
-    // 2. Nelder–Mead from the base
+    // 3. Nelder–Mead from the base
     let start: Vec<f64> = free.iter().map(|_| 1.0).chain([lag0]).collect();
     let mut simplex = vec![start.clone()];
     for k in 0..start.len() {
@@ -241,7 +238,7 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
     let best =
         result.state.best_param.clone().ok_or_else(|| CalibrateError::Fit("no parameter found".into()))?;
 
-    // 3. uncertainty
+    // 4. uncertainty
     let residuals = problem.residuals(&best)?;
     let r = DVector::from_vec(residuals.weighted(sigmas));
     let cost_fit = r.norm_squared();
@@ -259,18 +256,18 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
             Estimate {
                 name: p.name,
                 unit: p.unit,
-                base: f64::from((p.get)(base_in)),
-                value: f64::from((p.get)(&profile)),
+                base: p.of(base),
+                value: p.of(&profile),
                 sigma: k.and_then(|k| cov.as_ref().map(|c| c[(k, k)].max(0.0).sqrt() * problem.scale(i))),
             }
         })
         .collect();
 
-    // 4. the sonar's noise, from what is left at rest
+    // 5. the sonar's noise, from what is left at rest
     let sonar_noise = Estimate {
         name: "sonar.noise_sigma_cm",
         unit: "cm",
-        base: f64::from(base_in.sonar.noise_sigma_cm),
+        base: f64::from(base.sonar.noise_sigma_cm),
         value: rms(&residuals.range),
         sigma: Some(rms(&residuals.range) / (2.0 * residuals.range.len().max(1) as f64).sqrt()),
     };
@@ -279,11 +276,10 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
     if let Some(n) = &imu_noise {
         profile.imu.noise_sigma_deg = n.value as f32;
     }
-    readings.push(sonar_noise.clone());
+    readings.push(sonar_noise);
     Ok(Fitted {
         values,
         readings,
-        sonar_noise,
         lag_s,
         samples: r.len(),
         residuals,
