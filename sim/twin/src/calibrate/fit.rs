@@ -107,10 +107,6 @@ pub struct Fitted {
     pub lag_s: f64,
     /// The residuals at the fit.
     pub residuals: Residuals,
-    /// Sum of squared weighted residuals and their count, at the base and at the fit.
-    pub cost_base: f64,
-    /// See `cost_base`.
-    pub cost_fit: f64,
     /// Samples in the fit.
     pub samples: usize,
     /// Twin runs the fit took.
@@ -214,7 +210,6 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
     // 2. observability, at the base and a first round trip of 20 ms
     let lag0 = 0.02 / LAG_SCALE_S;
     let x0: Vec<f64> = (0..PARAMS.len()).map(|_| 1.0).chain([lag0]).collect();
-    let cost_base = all.weighted(&x0)?.norm_squared();
     let j0 = all.jacobian(&x0, &[PROBE; PARAMS.len()])?;
     let free: Vec<usize> =
         (0..PARAMS.len()).filter(|&i| (j0.column(i) * PROBE).norm_squared() >= 1.0).collect();
@@ -283,8 +278,6 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
         lag_s,
         samples: r.len(),
         residuals,
-        cost_base,
-        cost_fit,
         evaluations: problem.evaluations.get(),
         profile,
     })
