@@ -64,7 +64,7 @@ impl CalibrateArgs {
         );
         out.push_str("  value                      base        fitted      ± 1 sigma\n");
         for e in fitted.all() {
-            let sigma = e.sigma.map_or("not observable: kept".to_owned(), |s| format!("{s:.4}"));
+            let sigma = e.sigma.map_or("not observable: kept".to_owned(), twin::calibrate::fit::significant);
             let _ = writeln!(out, "  {:<26} {:<11.4} {:<11.4} {sigma} {}", e.name, e.base, e.value, e.unit);
         }
         out.push_str("fit residual (RMS, recorded less twin), base profile → fitted:\n");
@@ -85,6 +85,9 @@ impl CalibrateArgs {
         Ok(out)
     }
 }
+
+/// One panel of the gap plot: its title and the stream it draws.
+type Panel = (&'static str, fn(&Gap) -> &[(f64, f64)]);
 
 /// `explobot replay REC --compare [--profile P]… [--room ROOM] [--plot FILE.svg]`: the gap of each
 /// profile, as a table, over time, and as a plot.
@@ -140,7 +143,7 @@ fn svg(gaps: &[(String, Gap)]) -> String {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{W}\" height=\"{}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n",
         2.0 * H + 60.0
     );
-    let panels: [(&str, fn(&Gap) -> &[(f64, f64)]); 2] = [
+    let panels: [Panel; 2] = [
         ("heading error, deg (recorded less twin)", |g| &g.residuals.heading),
         ("range error at rest, cm", |g| &g.residuals.range),
     ];

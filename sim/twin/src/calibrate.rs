@@ -4,8 +4,9 @@
 //! Concept: [`Recorded::from_recording`] takes from Carto's side of a recording the bytes Carto
 //! wrote to both boards, with their times, and what the boards answered: the motor board's wheel
 //! speeds, the IMU's heading and the sonar's ranges. [`open_loop`] plays the written bytes into
-//! the twin's boards at the same times (delayed by the link's round trip, a fitted nuisance
-//! value) with the twin's own noise off, so the twin answers what its model predicts.
+//! the twin's boards at the same times with the twin's own noise off, so the twin answers what
+//! its model predicts; [`Predicted::lagged`] sets the link's round trip (a fitted nuisance
+//! value) by which the recorded answers trail the commands.
 //! [`Gap::measure`] compares the two streams (`explobot replay REC --compare`);
 //! [`fit::fit`] moves the profile's physical values until they agree (`explobot calibrate`).
 //!
@@ -167,38 +168,57 @@ fn unwrap_deg(last: Option<f64>, cw_deg: f64) -> f64 {
     }
 }
 
-/// The twin's answers to the recorded commands, one sample per physics step.
+/// The twin's answers to the recorded commands, one sample per physics step, as Carto would
+/// have received them `lag_s` (the link's round trip) after the commands.
+///
+/// The round trip is applied to the answers, not to the commands: for the twin, which does not
+/// change with time, the two are the same, but a command reaches the twin's boards only at a
+/// step, so delaying the commands would move the answers by whole steps and leave the fit's
+/// cost flat between two (a simplex stalls there: time constants 7–10 % short through the
+/// real-time link). Delayed answers are read between steps, so the cost is smooth in it.
 #[derive(Debug, Clone)]
 pub struct Predicted {
     dt_s: f64,
+    lag_s: f64,
     rpm: Vec<[f64; 4]>,
     heading: Vec<f64>,
     range: Vec<Option<f64>>,
 }
 
 impl Predicted {
-    /// The boards answer at a step's start, before it moves: what they report at `t` is the
-    /// state after the step before.
-    fn index(&self, t: f64) -> usize {
-        ((t / self.dt_s - 1.0).round().max(0.0) as usize).min(self.rpm.len().saturating_sub(1))
+    /// The same answers received `lag_s` after the commands.
+    pub fn lagged(self, lag_s: f64) -> Predicted {
+        Predicted { lag_s: lag_s.max(0.0), ..self }
+    }
+
+    /// The fractional step of what Carto received at `t`: the boards answer at a step's start,
+    /// before it moves, so they report the state after the step before.
+    fn step(&self, t: f64) -> f64 {
+        ((t - self.lag_s) / self.dt_s - 1.0).max(0.0)
+    }
+
+    /// The step at or before `t` and the fraction to the next (linear interpolation).
+    fn between(&self, t: f64) -> (usize, f64) {
+        let x = self.step(t);
+        let i = (x.floor() as usize).min(self.rpm.len().saturating_sub(2));
+        (i, (x - i as f64).clamp(0.0, 1.0))
     }
 
     /// Wheel speeds at `t`, rpm (linear between steps).
     pub fn rpm_at(&self, t: f64) -> [f64; 4] {
-        let x = (t / self.dt_s - 1.0).max(0.0);
-        let i = (x.floor() as usize).min(self.rpm.len().saturating_sub(2));
-        let f = (x - i as f64).clamp(0.0, 1.0);
+        let (i, f) = self.between(t);
         std::array::from_fn(|w| self.rpm[i][w] * (1.0 - f) + self.rpm[i + 1][w] * f)
     }
 
-    /// Heading at `t`, degrees clockwise, unwrapped.
+    /// Heading at `t`, degrees clockwise, unwrapped (linear between steps).
     pub fn heading_at(&self, t: f64) -> f64 {
-        self.heading[self.index(t)]
+        let (i, f) = self.between(t);
+        self.heading[i] * (1.0 - f) + self.heading[i + 1] * f
     }
 
-    /// The latest sonar result at `t`, cm.
+    /// The latest sonar result at `t`, cm (the nearest step: the sonar reports whole results).
     pub fn range_at(&self, t: f64) -> Option<f64> {
-        self.range[self.index(t)]
+        self.range[(self.step(t).round() as usize).min(self.range.len().saturating_sub(1))]
     }
 }
 
@@ -220,13 +240,12 @@ pub fn noiseless(profile: &RobotProfile) -> RobotProfile {
     p
 }
 
-/// Plays the recorded writes into a twin of `profile` standing at `room`'s start, the motor
-/// commands `lag_s` late (the link's round trip), until the recording ends.
+/// Plays the recorded writes into a twin of `profile` standing at `room`'s start, at their
+/// recorded times, until the recording ends (round trip 0: see [`Predicted::lagged`]).
 pub fn open_loop(
     room: &Scenario,
     profile: &RobotProfile,
     rec: &Recorded,
-    lag_s: f64,
 ) -> Result<Predicted, CalibrateError> {
     let setup = RunSetup::with_profile(room.clone(), noiseless(profile), "", "<calibration room>")?;
     let dt = setup.dt();
@@ -237,6 +256,7 @@ pub fn open_loop(
     let steps = ((rec.end_s + 0.5) / dt_s).ceil() as usize;
     let mut out = Predicted {
         dt_s,
+        lag_s: 0.0,
         rpm: Vec::with_capacity(steps + 1),
         heading: Vec::with_capacity(steps + 1),
         range: Vec::with_capacity(steps + 1),
@@ -247,8 +267,7 @@ pub fn open_loop(
         let now = Instant::ZERO + Duration::from_micros(dt.total_micros() * k as u64);
         let t = now.as_secs_f64();
         while let Some(w) = rec.writes.get(next) {
-            let due = if w.to_motor { w.at_s + lag_s } else { w.at_s };
-            if due > t {
+            if w.at_s > t {
                 break;
             }
             if w.to_motor { &mut motor } else { &mut sensor }.rx.extend_from_slice(&w.bytes);
@@ -458,13 +477,14 @@ pub fn rms(v: &[(f64, f64)]) -> f64 {
 }
 
 /// The link's round trip that best explains the recorded wheel speeds for `profile`: the one of
-/// 0, 2, …, 100 ms with the least squared wheel-speed residual (`replay --compare` without a fit).
+/// 0, 1, …, 100 ms with the least squared wheel-speed residual (`replay --compare` without a fit).
 pub fn best_lag(room: &Scenario, profile: &RobotProfile, rec: &Recorded) -> Result<f64, CalibrateError> {
+    let mut p = open_loop(room, profile, rec)?;
     let mut best = (f64::INFINITY, 0.0);
-    for ms in (0..=100).step_by(2) {
+    for ms in 0..=100 {
         let lag = f64::from(ms) / 1000.0;
-        let r = Residuals::of(rec, &open_loop(room, profile, rec, lag)?);
-        let cost = rms(&r.rpm);
+        p = p.lagged(lag);
+        let cost = rms(&Residuals::of(rec, &p).rpm);
         if cost < best.0 {
             best = (cost, lag);
         }
@@ -504,7 +524,7 @@ impl Gap {
         rec: &Recorded,
         lag_s: f64,
     ) -> Result<Gap, CalibrateError> {
-        let p = open_loop(room, profile, rec, lag_s)?;
+        let p = open_loop(room, profile, rec)?.lagged(lag_s);
         Ok(Gap { profile: profile.name.clone(), residuals: Residuals::of(rec, &p) })
     }
 

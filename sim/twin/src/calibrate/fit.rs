@@ -12,11 +12,13 @@
 //!    scales with the weight.
 //! 3. **The fit.** Nelder–Mead (`argmin`) minimises the sum of squared weighted residuals
 //!    ([`super::Residuals::weighted`]) over the observable values, each scaled by its base, and
-//!    the link's round trip (a nuisance value, 0–200 ms).
-//! 4. **Uncertainty.** From the Jacobian at the optimum (the round trip held), the Gauss–Newton
-//!    covariance `s²·(JᵀJ)⁻¹`, with `s²` the sum of squares over its degrees of freedom (so a
-//!    misjudged σ scales out): one standard deviation per value. It is statistical only: the
-//!    twin's 5 ms steps bias the time constant by about 1 %, more than its σ.
+//!    the link's round trip (a nuisance value, 0–200 ms, smooth: see
+//!    [`super::Predicted::lagged`]).
+//! 4. **Uncertainty.** From the Jacobian at the optimum (the round trip included, so a value
+//!    that trades off against it is as uncertain as that makes it), the Gauss–Newton covariance
+//!    `s²·(JᵀJ)⁻¹`, with `s²` the sum of squares over its degrees of freedom (so a misjudged σ
+//!    scales out): one standard deviation per value. It is statistical only: the twin's 5 ms
+//!    steps bias the time constant by about 1 %, more than its σ.
 //! 5. **The sonar's noise** is the RMS of the ranges at rest less the model's, with its standard
 //!    error `σ/√(2n)`.
 //!
@@ -149,7 +151,7 @@ impl Problem<'_> {
     fn residuals(&self, x: &[f64]) -> Result<Residuals, CalibrateError> {
         self.evaluations.set(self.evaluations.get() + 1);
         let (p, lag) = self.at(x);
-        Ok(Residuals::of(self.rec, &open_loop(self.room, &p, self.rec, lag)?))
+        Ok(Residuals::of(self.rec, &open_loop(self.room, &p, self.rec)?.lagged(lag)))
     }
 
     fn weighted(&self, x: &[f64]) -> Result<DVector<f64>, CalibrateError> {
@@ -237,9 +239,9 @@ pub fn fit(room: &Scenario, base: &RobotProfile, rec: &Recorded) -> Result<Fitte
     let residuals = problem.residuals(&best)?;
     let r = DVector::from_vec(residuals.weighted(sigmas));
     let cost_fit = r.norm_squared();
-    // the round trip is held at its optimum: the twin applies commands on its own steps, so the
-    // residuals are flat in it between two steps
-    let j = problem.jacobian(&best, &vec![STEP; free.len()])?;
+    // the values' relative steps, then 1 ms of round trip
+    let steps: Vec<f64> = free.iter().map(|_| STEP).chain([0.001 / LAG_SCALE_S]).collect();
+    let j = problem.jacobian(&best, &steps)?;
     let dof = (r.len().saturating_sub(free.len() + 1)).max(1) as f64;
     let cov = (j.transpose() * &j).try_inverse().map(|inv| inv * (cost_fit / dof));
     let (profile, lag_s) = problem.at(&best);
@@ -303,9 +305,11 @@ impl Fitted {
             let field = line.trim_start().split(':').next().unwrap_or("");
             if let Some(e) = self.all().find(|e| e.name.rsplit('.').next() == Some(field)) {
                 match e.sigma {
-                    Some(s) => {
-                        out.push_str(&format!(" // fitted to {recording}: ± {s:.3} (base {:.4})", e.base))
-                    }
+                    Some(s) => out.push_str(&format!(
+                        " // fitted to {recording}: ± {} (base {:.4})",
+                        significant(s),
+                        e.base
+                    )),
                     None => out.push_str(&format!(" // not observable in {recording}: the base value")),
                 }
             }
@@ -433,4 +437,13 @@ pub fn drift_and_noise(rec: &Recorded, base: &RobotProfile) -> (Option<Estimate>
         sigma: Some(sigma / (2.0 * n as f64).sqrt()),
     };
     (Some(drift), Some(noise))
+}
+
+/// `x` to three significant digits (a σ of 1e-5 m stays readable).
+pub fn significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
 }

@@ -8,8 +8,7 @@ fn room() -> Scenario {
 
 /// The default robot with every fitted value moved 10–30 % (issue 44's hidden robot).
 fn hidden() -> RobotProfile {
-    let mut p = RobotProfile::default();
-    p.name = "hidden".into();
+    let mut p = RobotProfile { name: "hidden".into(), ..RobotProfile::default() };
     p.geometry.mass_kg *= 1.25;
     p.geometry.wheel_radius_m *= 1.12;
     p.motor.tau_ms *= 1.3;
@@ -87,4 +86,13 @@ fn headings_unwrap_across_north() {
     assert_eq!(unwrap_deg(Some(359.0), 1.0), 361.0);
     assert_eq!(unwrap_deg(Some(361.0), 358.0), 358.0);
     assert_eq!(unwrap_deg(None, 10.0), 10.0);
+}
+
+#[test]
+fn uncertainties_print_with_three_significant_digits() {
+    use super::fit::significant;
+    assert_eq!(significant(1.1335e-5), "0.0000113");
+    assert_eq!(significant(0.2887), "0.289");
+    assert_eq!(significant(12.34), "12.3");
+    assert_eq!(significant(1234.0), "1234");
 }
