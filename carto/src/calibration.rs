@@ -167,7 +167,7 @@ mod tests {
             if let Some(d) = cal.poll(now) {
                 sent.push((now, d));
             }
-            now = now + Duration::from_millis(10);
+            now += Duration::from_millis(10);
         }
         assert!(cal.is_done());
         // never a gap of a watchdog's length

@@ -1,4 +1,4 @@
-#![doc = include_str!("../README.md")]
+#![doc = include_str!("../../../README.md")]
 //! `carto`: the robot controller binary, a thin shell over [`carto::CartoRuntime`] that owns the
 //! wall clock, the signals and the ports.
 //!
@@ -24,7 +24,7 @@
 //! | 3 | an internal error (a panic) |
 
 use std::io::Read;
-use std::os::fd::{AsFd, BorrowedFd};
+use std::os::fd::AsFd;
 use std::os::unix::net::UnixStream;
 use std::panic::AssertUnwindSafe;
 use std::path::{Path, PathBuf};
@@ -33,7 +33,11 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration as StdDuration;
 
+mod boards;
+mod signals;
+
 use anyhow::{Context, Result, bail};
+use boards::{Board, BoardLink};
 use carto::backoff::Backoff;
 use carto::recording::{MaybeTraced, TracedListener};
 use carto::{Carto, CartoConfig, CartoRuntime};
@@ -41,9 +45,10 @@ use clap::{Parser, ValueEnum};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use robot_model::profile::RobotProfile;
 use robot_model::time::{Duration, Instant};
+use signals::{signal_exit_code, signal_name, stop_signals};
 use transport::recorder::{Recorder, RecorderConfig};
 use transport::recording::{FORMAT_VERSION, Oracle, Recording};
-use transport::{Clock, KeepAlive, Link, SerialLink, TcpLink, TcpListenerLink, TraceHandle, WallClock};
+use transport::{Clock, KeepAlive, TcpListenerLink, TraceHandle, WallClock};
 
 const DEFAULT_PROFILE: &str = "scenarios/robots/mecanum-4wd.ron";
 /// Longest wait for the stop frame to leave on the way out.
@@ -199,61 +204,6 @@ fn main() -> ExitCode {
     ExitCode::from(code)
 }
 
-/// Every signal whose default action ends the process and that a process may catch: each goes
-/// through the stop path. Not here: SIGKILL and SIGSTOP (cannot be caught), SIGSEGV, SIGBUS,
-/// SIGILL and SIGFPE (faults of Carto itself: signal-hook refuses them; a Rust panic is handled
-/// instead), SIGPIPE (ignored by Rust's runtime: a write to a closed socket fails and ends that
-/// session only), and the signals whose default is to stop, continue or be ignored.
-fn stop_signals() -> Vec<i32> {
-    use nix::libc;
-    let mut sigs = vec![
-        libc::SIGTERM,
-        libc::SIGINT,
-        libc::SIGHUP,
-        libc::SIGQUIT,
-        libc::SIGUSR1,
-        libc::SIGUSR2,
-        libc::SIGALRM,
-        libc::SIGVTALRM,
-        libc::SIGPROF,
-        libc::SIGIO,
-        libc::SIGXCPU,
-        libc::SIGXFSZ,
-        libc::SIGSYS,
-        libc::SIGTRAP,
-        libc::SIGABRT,
-    ];
-    #[cfg(any(target_os = "linux", target_os = "android"))]
-    sigs.extend([libc::SIGPWR, libc::SIGSTKFLT]);
-    #[cfg(any(target_os = "linux", target_os = "android"))]
-    sigs.extend(libc::SIGRTMIN()..=libc::SIGRTMAX());
-    sigs
-}
-
-fn signal_name(sig: usize) -> String {
-    let Ok(n) = i32::try_from(sig) else {
-        return sig.to_string();
-    };
-    #[cfg(any(target_os = "linux", target_os = "android"))]
-    if (nix::libc::SIGRTMIN()..=nix::libc::SIGRTMAX()).contains(&n) {
-        return format!("SIGRTMIN+{}", n - nix::libc::SIGRTMIN());
-    }
-    match signal_hook::low_level::signal_name(n) {
-        Some(name) => name.to_owned(),
-        None => sig.to_string(),
-    }
-}
-
-/// 0 for the signals that ask for an orderly stop (SIGTERM, SIGINT, SIGHUP), 128 + N for the
-/// others, as a shell reports a death by signal N: a supervisor can tell them apart.
-fn signal_exit_code(sig: usize) -> u8 {
-    match i32::try_from(sig) {
-        Ok(signal_hook::consts::SIGTERM | signal_hook::consts::SIGINT | signal_hook::consts::SIGHUP) => 0,
-        Ok(n) => u8::try_from(128 + n).unwrap_or(u8::MAX),
-        Err(_) => u8::MAX,
-    }
-}
-
 fn load_profile(path: Option<&Path>) -> Result<RobotProfile> {
     match path {
         Some(p) => {
@@ -283,50 +233,6 @@ fn seconds(flag: &str, s: f64) -> Result<Option<Duration>> {
         bail!("--{flag} must be a number of seconds, 0 or more (got {s})");
     }
     Ok((s > 0.0).then(|| Duration::from_secs_f64(s)))
-}
-
-/// One board port: where it is, and how often to try it again while it is down.
-struct Board {
-    which: &'static str,
-    kind: TransportKind,
-    port: String,
-    baud: u32,
-    backoff: Backoff,
-    /// The current outage has been logged.
-    down_logged: bool,
-}
-
-/// A board link the loop can wait on: a serial port (or the twin's pty) or a TCP connection.
-enum BoardLink {
-    Serial(SerialLink),
-    Tcp(TcpLink),
-}
-
-impl Link for BoardLink {
-    type Error = transport::Error;
-
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, transport::Error> {
-        match self {
-            BoardLink::Serial(l) => l.read(buf),
-            BoardLink::Tcp(l) => l.read(buf),
-        }
-    }
-
-    fn write(&mut self, buf: &[u8]) -> Result<usize, transport::Error> {
-        match self {
-            BoardLink::Serial(l) => l.write(buf),
-            BoardLink::Tcp(l) => l.write(buf),
-        }
-    }
-}
-
-impl AsFd for BoardLink {
-    fn as_fd(&self) -> BorrowedFd<'_> {
-        match self {
-            BoardLink::Serial(l) => l.as_fd(),
-            BoardLink::Tcp(l) => l.as_fd(),
-        }
-    }
 }
 
 /// `--record`: the recorder and the board links' traces, kept across reopenings.
@@ -370,23 +276,6 @@ fn start_recording(args: &Args, profile: &RobotProfile) -> Result<Option<Record>
     recorder.add("sensor", "carto", boards[1].clone());
     tracing::info!(file = %path.display(), max_mib = args.record_max_mib, flush_s = args.record_flush, "recording every link");
     Ok(Some(Record { recorder, boards }))
-}
-
-impl Board {
-    fn open(&self, connect_timeout: StdDuration) -> Result<BoardLink> {
-        let (which, port, baud) = (self.which, self.port.as_str(), self.baud);
-        Ok(match self.kind {
-            TransportKind::Sim | TransportKind::Serial => BoardLink::Serial(
-                SerialLink::builder(port, baud)
-                    .open()
-                    .with_context(|| format!("cannot open the {which} board port {port} ({baud} baud)"))?,
-            ),
-            TransportKind::Tcp => BoardLink::Tcp(
-                TcpLink::connect_timeout(port, connect_timeout)
-                    .with_context(|| format!("cannot connect to the {which} board at {port}"))?,
-            ),
-        })
-    }
 }
 
 /// A board link as the runtime holds it.
