@@ -38,14 +38,14 @@ fn explobot(args: &[&str]) -> String {
     text
 }
 
-/// `name`'s row in `explobot calibrate`'s table: (base, fitted, σ).
-fn row(table: &str, name: &str) -> (f64, f64, Option<f64>) {
+/// The value column of `name`'s row in `explobot calibrate`'s table: (fitted, σ).
+fn row(table: &str, name: &str) -> (f64, Option<f64>) {
     let line = table
         .lines()
         .find(|l| l.trim_start().starts_with(name))
         .unwrap_or_else(|| panic!("{name}:\n{table}"));
     let cols: Vec<&str> = line.split_whitespace().collect();
-    (cols[1].parse().unwrap(), cols[2].parse().unwrap(), cols[3].parse().ok())
+    (cols[2].parse().unwrap(), cols[3].parse().ok())
 }
 
 #[test]
@@ -86,7 +86,7 @@ fn issue_44_calibrate_recovers_a_hidden_robot_from_carto_s_own_recording() {
             .filter_map(|l| l.split_whitespace().next())
             .find(|n| n.ends_with(&format!(".{key}")))
             .unwrap_or_else(|| panic!("{key} missing:\n{table}"));
-        let (base, fit, sigma) = row(&table, name);
+        let (fit, sigma) = row(&table, name);
         let err = (fit - value).abs();
         match sigma {
             // within 5 %, or within three of its reported standard deviations
