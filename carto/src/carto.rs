@@ -89,6 +89,8 @@ pub struct CartoStats {
     pub turns_undone: u64,
     /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
     pub pose_fixes: u64,
+    /// Looks aside taken to correct the belief against a floor plan.
+    pub looks_aside: u64,
     /// Sonar readings kept while a turn ran (near its end, close echoes only).
     pub turn_readings: u64,
     /// Sonar readings kept while a FORWARD drove.

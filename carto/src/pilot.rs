@@ -123,6 +123,9 @@ pub struct Pilot {
     rest_since: Instant,
     /// A reading of the running scan never came.
     scan_missing: bool,
+    /// This FORWARD's scan is a look aside to this side (+1 left, −1 right), to correct the
+    /// belief (`pilot/safety.rs`, "Looking aside").
+    looking_aside: Option<f64>,
     /// The mapping turn that just succeeded: once its task has ended, the robot looks past it.
     look_pending: Option<Move>,
     /// Re-facings of the grid heading that failed in a row ([`Pilot::refacing_failed`]).
@@ -148,6 +151,7 @@ impl Pilot {
             stage: Stage::Next,
             rest_since: Instant::ZERO,
             scan_missing: false,
+            looking_aside: None,
             look_pending: None,
             reface_failures: 0,
             replies: Vec::new(),
@@ -322,6 +326,7 @@ impl Pilot {
                             self.localise(io, cm);
                             self.note_reading(io, cm);
                             self.scan_missing = false;
+                            self.plan_look_aside(io);
                             self.look(io, 0);
                         }
                     }

@@ -854,3 +854,42 @@ fn a_disconnect_before_the_move_done_of_a_turn_made_off_the_centre_takes_the_tur
         );
     }
 }
+
+/// Drives `cells` FORWARDs east with nothing ahead, with or without a floor plan holding a
+/// wall 40 cm left of the row; the looks aside taken and the most the body turned left and
+/// right of east on the way, degrees.
+fn forwards_along_a_wall(cells: usize, plan: bool) -> (u64, f64, f64) {
+    let mut h = ready_with(fake::test_config());
+    if plan {
+        let row_y = -5.0 * 0.30;
+        h.carto.add_known_surfaces((0..900).map(|k| (f64::from(k) * 0.01, row_y + 0.40)));
+    }
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    let (mut left, mut right) = (0.0_f64, 0.0_f64);
+    for i in 0..cells {
+        h.send(cartography(Command::Forward));
+        let least = std::cell::Cell::new(0.0_f64);
+        let most = run_to_move_done_tracking(&mut h, i + 1, |h| {
+            let yaw = h.robot.yaw.to_degrees();
+            least.set(least.get().min(yaw));
+            yaw
+        });
+        (left, right) = (left.max(most), right.max(-least.get()));
+    }
+    (h.carto.stats().looks_aside, left, right)
+}
+
+#[test]
+fn with_a_floor_plan_the_uncertainty_across_the_row_sends_a_look_towards_the_wall() {
+    // issue 42, item 2: with a plan, the belief is corrected in every direction it has surfaces
+    // in; one forward sonar sees across the row only when the body turns, so Carto looks
+    // aside (60° towards the plan's nearer surface) once its belief across the row has grown
+    let (looks, left, right) = forwards_along_a_wall(20, true);
+    assert!(looks >= 1, "no look aside in 20 cells");
+    assert!(left > 45.0 && right < 5.0, "turned {left:.0}° left, {right:.0}° right");
+    // without a plan nothing is known to look at: the FORWARDs drive straight
+    let (looks, left, right) = forwards_along_a_wall(8, false);
+    assert_eq!(looks, 0);
+    assert!(left < 5.0 && right < 5.0, "turned {left:.0}° left, {right:.0}° right");
+}

@@ -95,6 +95,7 @@ impl Carto {
             heading_jumps: self.sensors.imu_drift_jumps(),
             push_jumps: self.sensors.drift_counts().pushes,
             pose_fixes: p.pose_fixes,
+            looks_aside: p.looks_aside,
             ..self.stats
         }
     }

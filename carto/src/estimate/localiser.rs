@@ -26,6 +26,11 @@
 //!   evidence grid: an echo marks an arc across the cone, and seen from another row its off-axis
 //!   cells lie up to `1 − cos 7.5°` of the range nearer than the surface; ranges compared with
 //!   those arcs pulled the belief away from the walls (`docs/journal/world-model.md`).
+//! - **Looks aside** ([`Localiser::at_look`]): with a floor plan, a reading at rest taken with
+//!   the body turned off the grid heading (`pilot/safety.rs`, "Looking aside") corrects the
+//!   position against the plan as a straight one does, and leaves what the straight readings
+//!   keep (the surfaces heard ahead, the last straight reading) alone. Which side to look to is
+//!   the plan's answer too ([`Localiser::look_aside_side`]).
 //! - **The gate is the filter's**: a range more than 3 σ of the innovation from the expected one
 //!   is another object. It widens with the belief's uncertainty, so after a touch a range that
 //!   disagrees by centimetres is taken, where a fixed window would refuse it.
@@ -69,7 +74,7 @@
 use robot_model::time::Instant;
 
 use super::grid::{EvidenceGrid, GridParams};
-use super::pose::{Fan, MotionNoise, PoseFilter, RangeUpdate};
+use super::pose::{Fan, MotionNoise, PoseFilter, RangeUpdate, expected_range};
 use super::sonar::{Reading, SonarModel};
 use robot_model::grid::{GridPose, Heading};
 
@@ -99,6 +104,11 @@ pub const SAME_SPOT_DEG: f64 = 3.0;
 /// Echoes farther than this are not kept as surfaces nor matched with them, metres: the cone is
 /// then wider than the body, and what answers may be another face than the one kept.
 pub const WALL_MAX_M: f64 = 1.0;
+
+/// The farthest echo a look aside is taken for, metres ([`Localiser::look_aside_side`]): with the
+/// heading known to [`IMU_HEADING_SIGMA_DEG`], a surface met 30° off head-on at this range is
+/// placed to under 1 cm.
+pub const LOOK_ASIDE_MAX_M: f64 = 1.5;
 /// Echoes farther than this are not paired with the reading of the next cell, metres.
 pub const RELATIVE_MAX_M: f64 = 2.0;
 
@@ -231,21 +241,8 @@ impl Localiser {
     /// pose. Returns the correction `(dx, dy)` in Carto's frame, metres (zero when the range
     /// told nothing).
     pub fn at_rest(&mut self, now: Instant, pose: GridPose, believed: Pose2, reading: Reading) -> (f64, f64) {
-        let noise = self.noise;
-        let (filter, synced, at) = self.filter.get_or_insert_with(|| {
-            (PoseFilter::new(believed, START_SIGMA_M, START_SIGMA_DEG), believed, now)
-        });
-        let dt = now.saturating_since(*at).as_secs_f64();
-        let mid = (0.5 * (synced.yaw_deg + believed.yaw_deg)).to_radians();
-        let (dx, dy) = (believed.x - synced.x, believed.y - synced.y);
-        let along = dx * mid.cos() + dy * mid.sin();
-        let left = -dx * mid.sin() + dy * mid.cos();
-        filter.predict(along, left, (believed.yaw_deg - synced.yaw_deg).to_radians(), dt, &noise);
-        if core::mem::take(&mut self.touched) {
-            filter.widen(TOUCH_SIGMA_M, TOUCH_SIGMA_DEG);
-        }
-        filter.set_mean(believed);
-        filter.set_heading(believed.yaw_deg, IMU_HEADING_SIGMA_DEG);
+        self.predict_to(now, believed);
+        let Some((filter, ..)) = self.filter.as_mut() else { return (0.0, 0.0) };
         let u = unit(pose.heading);
         let Reading::Echo(range) = reading else {
             self.last_straight = None;
@@ -296,6 +293,84 @@ impl Localiser {
             self.walls.remember(pose.heading, lateral, depth_m, placed_var_m2);
         }
         self.last_straight = (range <= RELATIVE_MAX_M).then_some(Straight { pose, depth_m, placed_var_m2 });
+        self.finish(now, believed, reading)
+    }
+
+    /// Grows the filter by the motion from the last reading to `believed` at `now` (started there
+    /// on the first), widened after a touch, and moves its mean to `believed`.
+    fn predict_to(&mut self, now: Instant, believed: Pose2) {
+        let noise = self.noise;
+        let (filter, synced, at) = self.filter.get_or_insert_with(|| {
+            (PoseFilter::new(believed, START_SIGMA_M, START_SIGMA_DEG), believed, now)
+        });
+        grow(filter, (*synced, *at), (believed, now), &noise);
+        if core::mem::take(&mut self.touched) {
+            filter.widen(TOUCH_SIGMA_M, TOUCH_SIGMA_DEG);
+        }
+        filter.set_mean(believed);
+        filter.set_heading(believed.yaw_deg, IMU_HEADING_SIGMA_DEG);
+    }
+
+    /// Whether a floor plan was given: every range at rest, in any direction, then corrects.
+    pub fn has_plan(&self) -> bool {
+        self.known_grid.is_some()
+    }
+
+    /// The standard deviation of the position across the heading `yaw_deg`, metres, as it would
+    /// be after predicting to `believed` at `now`; `None` before the first reading.
+    pub fn sigma_across_m(&self, now: Instant, believed: Pose2) -> Option<f64> {
+        let (mut filter, synced, at) = self.filter.clone()?;
+        grow(&mut filter, (synced, at), (believed, now), &self.noise);
+        let yaw = believed.yaw_deg.to_radians();
+        Some(filter.variance_along((-yaw.sin(), yaw.cos())).sqrt())
+    }
+
+    /// The side to look aside to from `robot`, `deg` each way (module docs of
+    /// `pilot/safety.rs`, "Looking aside"): +1 (left) or −1 (right), whichever the floor plan
+    /// puts the nearer echo on, within [`LOOK_ASIDE_MAX_M`]; `None` without a plan or an echo.
+    pub fn look_aside_side(&self, robot: Pose2, deg: f64) -> Option<f64> {
+        let known = self.known_grid.as_ref()?;
+        let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };
+        [1.0, -1.0]
+            .into_iter()
+            .filter_map(|side: f64| {
+                let looking = Pose2 { yaw_deg: robot.yaw_deg + side * deg, ..robot };
+                expected_range(known, looking, self.mount_m, &fan, LOOK_ASIDE_MAX_M).map(|r| (r, side))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, side)| side)
+    }
+
+    /// A reading taken at rest facing `believed`'s heading, off the grid heading (a look aside,
+    /// `pilot/safety.rs`, "Looking aside"), with a floor plan given: corrects the position
+    /// against the plan as [`Localiser::at_rest`] does, without touching what the straight
+    /// readings keep. Returns the correction; zero without a plan.
+    pub fn at_look(&mut self, now: Instant, believed: Pose2, reading: Reading) -> (f64, f64) {
+        if self.known_grid.is_none() {
+            return (0.0, 0.0);
+        }
+        self.predict_to(now, believed);
+        let (Some(known), Some((filter, ..))) = (&self.known_grid, self.filter.as_mut()) else {
+            return (0.0, 0.0);
+        };
+        let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };
+        let update = match reading {
+            Reading::Echo(range) => filter.correct_echo(known, self.mount_m, &fan, range, self.range_sigma_m),
+            Reading::NoEcho => RangeUpdate::NoSurface,
+        };
+        tracing::debug!(
+            x = believed.x,
+            y = believed.y,
+            yaw = believed.yaw_deg,
+            ?reading,
+            ?update,
+            "range looking aside"
+        );
+        match update {
+            RangeUpdate::Applied { .. } => self.counters.applied += 1,
+            RangeUpdate::Rejected { .. } => self.counters.rejected += 1,
+            RangeUpdate::NoSurface => self.counters.unmatched += 1,
+        }
         self.finish(now, believed, reading)
     }
 
@@ -380,6 +455,17 @@ fn unit(h: Heading) -> (f64, f64) {
     (f64::from(cols), -f64::from(rows))
 }
 
+/// Grows `filter` by the motion from `from` (the pose and time it was last synced at) to `to`.
+fn grow(filter: &mut PoseFilter, from: (Pose2, Instant), to: (Pose2, Instant), noise: &MotionNoise) {
+    let ((synced, at), (believed, now)) = (from, to);
+    let dt = now.saturating_since(at).as_secs_f64();
+    let mid = (0.5 * (synced.yaw_deg + believed.yaw_deg)).to_radians();
+    let (dx, dy) = (believed.x - synced.x, believed.y - synced.y);
+    let along = dx * mid.cos() + dy * mid.sin();
+    let left = -dx * mid.sin() + dy * mid.cos();
+    filter.predict(along, left, (believed.yaw_deg - synced.yaw_deg).to_radians(), dt, noise);
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -462,6 +548,51 @@ mod tests {
     /// Gen pillars 40, seed 1, room known: ranges expected from rays the sonar does not have
     /// (a 7-ray fan against the profile's 5) met pillar edges the sensor's rays miss, and each
     /// difference, on an oblique surface, pulled the belief 2 cm sideways, to 10 cm off.
+    #[test]
+    fn a_look_aside_corrects_across_the_heading_against_the_plan() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        // a wall along y = 0.6, left of a robot driving east along y = 0
+        loc.pin((-100..=300).map(|k| (f64::from(k) * 0.01, 0.6)));
+        assert!(loc.has_plan());
+        loc.at_rest(ms(0), cell(0), east(0.0), Reading::NoEcho);
+        // four cells east with nothing ahead: the uncertainty across grows
+        let before = loc.sigma_across_m(ms(20_000), east(1.8)).unwrap();
+        loc.at_rest(ms(20_000), cell(4), east(1.8), Reading::NoEcho);
+        // believed on y = 0, really 3 cm to the left (y = 0.03): looking 60° left, the range is
+        // what the sensor model expects from there
+        let look = Pose2 { yaw_deg: 60.0, ..east(1.8) };
+        let fan = Fan { ray_offsets_deg: &loc.fan_deg, incidence_limit_deg: loc.incidence_limit_deg };
+        let really = Pose2 { y: 0.03, ..look };
+        let range = expected_range(loc.known_grid.as_ref().unwrap(), really, loc.mount_m, &fan, 2.0).unwrap();
+        let (_, dy) = loc.at_look(ms(21_000), look, Reading::Echo(range));
+        assert!(before > 0.005, "{before}");
+        assert!((dy - 0.03).abs() < 0.012, "corrected by {dy}, across σ before {before}");
+        assert!(loc.sigma_across_m(ms(21_000), east(1.8 + dy)).unwrap() < before);
+    }
+
+    #[test]
+    fn a_look_aside_turns_to_the_side_the_plan_has_the_nearer_surface_on() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        assert_eq!(loc.look_aside_side(east(0.0), 60.0), None, "no plan, no look");
+        loc.pin((-100..=100).map(|k| (f64::from(k) * 0.01, 0.5))); // left, 0.5 m
+        assert_eq!(loc.look_aside_side(east(0.0), 60.0), Some(1.0));
+        loc.pin((-100..=100).map(|k| (f64::from(k) * 0.01, -0.3))); // right, nearer
+        assert_eq!(loc.look_aside_side(east(0.0), 60.0), Some(-1.0));
+        // nothing within reach either side (the walls 3 m away): no look
+        let mut far = Localiser::new(&CartoConfig::default());
+        far.pin((-100..=100).map(|k| (f64::from(k) * 0.01, 3.0)));
+        far.pin((-100..=100).map(|k| (f64::from(k) * 0.01, -3.0)));
+        assert_eq!(far.look_aside_side(east(0.0), 60.0), None);
+    }
+
+    #[test]
+    fn without_a_plan_a_look_aside_corrects_nothing() {
+        let mut loc = Localiser::new(&CartoConfig::default());
+        loc.at_rest(ms(0), cell(0), east(0.0), Reading::Echo(0.5));
+        let look = Pose2 { yaw_deg: 60.0, ..east(0.0) };
+        assert_eq!(loc.at_look(ms(1000), look, Reading::Echo(0.5)), (0.0, 0.0));
+    }
+
     #[test]
     fn a_known_room_expects_each_range_from_the_rays_the_sensor_model_casts() {
         let profile = robot_model::profile::RobotProfile::default();

@@ -255,25 +255,8 @@ impl PoseFilter {
     ) -> RangeUpdate {
         let theta = self.state[2];
         let axis = (theta.cos(), theta.sin());
-        let sensor = (self.state[0] + mount_m * axis.0, self.state[1] + mount_m * axis.1);
         let max_m = range_m + GATE_SIGMAS * (sigma_m + self.sigma_along(theta.to_degrees())) + 0.1;
-        let cos_limit = fan.incidence_limit_deg.min(MAX_INCIDENCE_DEG).to_radians().cos();
-        // the expected range, the ray's unit vector, the surface's normal and the cos of the incidence
-        let mut nearest: Option<(f64, Vec2, Vec2, f64)> = None;
-        for offset in fan.ray_offsets_deg {
-            let ray = theta + offset.to_radians();
-            let u = (ray.cos(), ray.sin());
-            let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else { continue };
-            if nearest.is_some_and(|(d, ..)| d <= expected) {
-                continue;
-            }
-            let normal = surface_normal(grid, hit, u);
-            let facing = -(normal.0 * u.0 + normal.1 * u.1); // cos of the incidence
-            if facing >= cos_limit {
-                nearest = Some((expected, u, normal, facing));
-            }
-        }
-        let Some((expected, u, normal, facing)) = nearest else {
+        let Some((expected, u, normal, facing)) = nearest_echo(grid, self.mean(), mount_m, fan, max_m) else {
             return RangeUpdate::NoSurface;
         };
         // r = n·(p0 − s)/(n·u) with s = (x, y) + m·axis: the derivatives for a plane through the
@@ -376,6 +359,42 @@ pub struct Fan<'a> {
     pub ray_offsets_deg: &'a [f64],
     /// A surface met further than this from head-on returns no echo, degrees.
     pub incidence_limit_deg: f64,
+}
+
+/// The echo the grid's surfaces would return to a sonar mounted `mount_m` ahead of a body at
+/// `robot`, its fan's rays cast to `max_m`: the nearest surface a ray meets within the incidence
+/// limit, as (range, the ray's unit vector, the surface's normal, the cos of the incidence).
+fn nearest_echo(
+    grid: &EvidenceGrid,
+    robot: Pose2,
+    mount_m: f64,
+    fan: &Fan,
+    max_m: f64,
+) -> Option<(f64, Vec2, Vec2, f64)> {
+    let theta = robot.yaw_deg.to_radians();
+    let sensor = (robot.x + mount_m * theta.cos(), robot.y + mount_m * theta.sin());
+    let cos_limit = fan.incidence_limit_deg.min(MAX_INCIDENCE_DEG).to_radians().cos();
+    let mut nearest: Option<(f64, Vec2, Vec2, f64)> = None;
+    for offset in fan.ray_offsets_deg {
+        let ray = theta + offset.to_radians();
+        let u = (ray.cos(), ray.sin());
+        let Some((expected, hit)) = first_occupied(grid, sensor, u, max_m) else { continue };
+        if nearest.is_some_and(|(d, ..)| d <= expected) {
+            continue;
+        }
+        let normal = surface_normal(grid, hit, u);
+        let facing = -(normal.0 * u.0 + normal.1 * u.1);
+        if facing >= cos_limit {
+            nearest = Some((expected, u, normal, facing));
+        }
+    }
+    nearest
+}
+
+/// The range the grid's surfaces would return to a sonar mounted `mount_m` ahead of a body at
+/// `robot` ([`PoseFilter::correct_echo`]'s expectation), up to `max_m`; `None` for no echo.
+pub fn expected_range(grid: &EvidenceGrid, robot: Pose2, mount_m: f64, fan: &Fan, max_m: f64) -> Option<f64> {
+    nearest_echo(grid, robot, mount_m, fan, max_m).map(|(range, ..)| range)
 }
 
 /// The distance along `u` from `from` to the first surface within `max_m`, and a point on it:

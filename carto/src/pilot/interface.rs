@@ -120,6 +120,9 @@ pub struct PilotCounters {
     pub turns_refused: u64,
     /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
     pub pose_fixes: u64,
+    /// Looks aside taken to correct the belief across the heading against a floor plan
+    /// (`pilot/safety.rs`, "Looking aside").
+    pub looks_aside: u64,
     /// Turns that failed (any move error) whose turn back to the heading they started from was
     /// started.
     pub turns_undone: u64,

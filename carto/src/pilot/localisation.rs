@@ -10,6 +10,7 @@
 use robot_model::grid::{GridPose, Heading, Move};
 
 use super::Io;
+use super::safety::LOOK_ASIDE_SIGMA_M;
 use crate::CartoConfig;
 use crate::estimate::localiser::Localiser;
 use crate::estimate::sonar::Reading;
@@ -181,16 +182,41 @@ impl Localisation {
             return false;
         };
         let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
-        let (dx, dy) = self.localiser.at_rest(io.now, pose, robot, reading);
-        let fixed = dx != 0.0 || dy != 0.0;
-        if fixed {
-            // into the nominal frame the odometry's offset is kept in
-            let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
-            let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
-            tracing::debug!(fix.along_m, fix.left_m, "belief corrected from the range at rest");
-            io.motor.correct_offset(fix);
-        }
+        let fix = self.localiser.at_rest(io.now, pose, robot, reading);
         self.last_straight = cm.map(|cm| Straight { pose, range_m: f64::from(cm) / 100.0 });
-        fixed
+        correct_odometry(io, pose, fix)
     }
+
+    /// Whether a look aside is due before the next FORWARD (`pilot/safety.rs`, "Looking
+    /// aside"): a floor plan is given and the belief's standard deviation across the heading
+    /// exceeds [`LOOK_ASIDE_SIGMA_M`].
+    pub(super) fn wants_look_aside(&self, io: &Io<'_>) -> bool {
+        self.localiser.has_plan()
+            && self
+                .believed(io)
+                .and_then(|robot| self.localiser.sigma_across_m(io.now, robot))
+                .is_some_and(|sigma| sigma > LOOK_ASIDE_SIGMA_M)
+    }
+
+    /// Corrects the belief from the reading `cm` taken at rest looking aside (the body turned off
+    /// the grid heading): against the floor plan only. Whether the belief was corrected.
+    pub(super) fn at_look(&mut self, io: &mut Io<'_>, cm: Option<f32>) -> bool {
+        let (Some(pose), Some(robot)) = (self.pose, self.believed(io)) else { return false };
+        let reading = cm.map_or(Reading::NoEcho, |cm| Reading::Echo(f64::from(cm) / 100.0));
+        let fix = self.localiser.at_look(io.now, robot, reading);
+        correct_odometry(io, pose, fix)
+    }
+}
+
+/// Moves the odometry by the localiser's correction `(dx, dy)` (Carto's frame) into the nominal
+/// frame of `pose`, in which its offset is kept. Whether there was a correction.
+fn correct_odometry(io: &mut Io<'_>, pose: GridPose, (dx, dy): (f64, f64)) -> bool {
+    if dx == 0.0 && dy == 0.0 {
+        return false;
+    }
+    let (sin, cos) = heading_deg(pose.heading).to_radians().sin_cos();
+    let fix = CellOffset { along_m: dx * cos + dy * sin, left_m: -dx * sin + dy * cos };
+    tracing::debug!(fix.along_m, fix.left_m, "belief corrected from a range at rest");
+    io.motor.correct_offset(fix);
+    true
 }

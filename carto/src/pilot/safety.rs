@@ -54,6 +54,20 @@
 //!   a push or a stall widens the belief first, so the gate opens and the next readings weigh
 //!   more than the wheels.
 //!
+//! - **Looking aside.** One forward sonar measures the position along the heading only; across
+//!   it the belief grows with every cell driven (the IMU's heading error turns into a sideways
+//!   error), and nothing corrects it until the robot faces another way. With a floor plan (the
+//!   twin's `--known-room`) a surface beside the row can be asked instead: when, after the
+//!   straight reading at rest has cleared a FORWARD, the belief's standard deviation across the
+//!   heading exceeds [`LOOK_ASIDE_SIGMA_M`] (a third of the 5 cm a run's belief may be off), no
+//!   scan is configured and the turning circle holds no known echo, the robot turns
+//!   [`LOOK_ASIDE_DEG`] towards the side where the plan puts the nearer echo (within
+//!   [`crate::estimate::localiser::LOOK_ASIDE_MAX_M`]; neither side has one: no look), takes one
+//!   reading at rest, corrects the belief from it against the plan
+//!   ([`crate::estimate::localiser::Localiser::at_look`]) and turns back before the corridor
+//!   check. One look, not two: one range across the row is what the belief lacks. Without a
+//!   plan there is no look: the echoes heard so far are placed from the belief being
+//!   corrected, and a range to them would measure nothing.
 //! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
 //!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
 //!   target, with an echo no farther than one cell, is kept ([`CartoConfig::turn_readings`]):
@@ -137,6 +151,15 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
 /// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
 pub(super) const ASIDE_STEP_M: f64 = 0.0025;
+
+/// The belief's standard deviation across the heading above which, with a floor plan, Carto
+/// looks aside before a FORWARD (module docs, "Looking aside"): a third of the 5 cm a run's
+/// belief may be off (`RobotProfile`'s `belief_error_max_m`), so the error stays inside it at 3 σ.
+pub(super) const LOOK_ASIDE_SIGMA_M: f64 = 0.05 / 3.0;
+
+/// How far each way a look aside turns the body, degrees: a range taken there measures the
+/// position mostly across the heading (sin 60° = 0.87 of it).
+pub(super) const LOOK_ASIDE_DEG: f64 = 60.0;
 /// An echo heard while moving is kept this many sonar σ beyond its range.
 pub(super) const FAR_SIGMAS: f64 = 3.0;
 
@@ -206,6 +229,37 @@ impl Safety {
     /// reading is taken after each but the last, which faces the grid heading again.
     pub(super) fn looks(&self) -> &'static [f64] {
         if self.scan_deg > 0.0 { &[1.0, -1.0, 0.0] } else { &[] }
+    }
+}
+
+impl Pilot {
+    /// The looks before this FORWARD (the signs of each, the last back to the grid heading) and
+    /// their angle: the scan's, else a look aside when one is due, else none.
+    fn looks_now(&self) -> (&'static [f64], f64) {
+        match (self.safety.scan_deg, self.looking_aside) {
+            (deg, _) if deg > 0.0 => (self.safety.looks(), deg),
+            (_, Some(side)) if side > 0.0 => (&[1.0, 0.0], LOOK_ASIDE_DEG),
+            (_, Some(_)) => (&[-1.0, 0.0], LOOK_ASIDE_DEG),
+            _ => (&[], 0.0),
+        }
+    }
+
+    /// Decides, after the straight reading at rest has cleared a FORWARD, whether it starts with
+    /// a look aside (module docs, "Looking aside"): no scan is configured, one is due, and the
+    /// turning circle holds no known echo.
+    pub(super) fn plan_look_aside(&mut self, io: &Io<'_>) {
+        self.looking_aside = None;
+        let Some(robot) = self.place.believed(io) else { return };
+        if self.safety.scan_deg > 0.0
+            || !self.place.wants_look_aside(io)
+            || self.echoes.in_turning_circle(robot).is_some()
+        {
+            return;
+        }
+        self.looking_aside = self.place.localiser().look_aside_side(robot, LOOK_ASIDE_DEG);
+        if self.looking_aside.is_some() {
+            self.counters.looks_aside += 1;
+        }
     }
 }
 
@@ -389,7 +443,8 @@ impl Pilot {
 
     /// Starts look number `look` of the scan, or, after the last, the FORWARD itself.
     pub(super) fn look(&mut self, io: &mut Io<'_>, look: usize) {
-        let Some(&sign) = self.safety.looks().get(look) else {
+        let (looks, deg) = self.looks_now();
+        let Some(&sign) = looks.get(look) else {
             return self.drive_forward(io);
         };
         if look == 0
@@ -397,7 +452,7 @@ impl Pilot {
         {
             return self.fail(io.now, &format!("scan before FORWARD: {e}"));
         }
-        match io.motor.start_look(io.now, sign * self.safety.scan_deg, io.sensors) {
+        match io.motor.start_look(io.now, sign * deg, io.sensors) {
             Ok(()) => self.stage = Stage::Looking { look },
             Err(e) => self.fail(io.now, &format!("scan before FORWARD: {e}")),
         }
@@ -405,11 +460,15 @@ impl Pilot {
 
     /// Waits for the reading after look number `look`; `false` while it has not come.
     pub(super) fn scan_reading(&mut self, io: &mut Io<'_>, look: usize, since: Instant) -> bool {
-        let last = look + 1 >= self.safety.looks().len();
+        let last = look + 1 >= self.looks_now().0.len();
         if !last {
             match io.us.latest() {
                 Some(r) if r.at >= self.rest_since => {
-                    self.note_reading(io, (r.value >= 0.0).then_some(r.value));
+                    let cm = (r.value >= 0.0).then_some(r.value);
+                    if self.looking_aside.is_some() && self.place.at_look(io, cm) {
+                        self.counters.pose_fixes += 1;
+                    }
+                    self.note_reading(io, cm);
                 }
                 _ if io.now.saturating_since(since) < self.distance_wait => return false,
                 _ => {
