@@ -5,6 +5,9 @@
 #                                          docs/results/<name>/{summary.md,STAMP} and
 #                                          docs/results/compare-known-room.md, then rewrite the
 #                                          README's status box
+#   bash docs/results/update.sh --only NAME
+#                                          re-run the one sweep NAME (a change that moves only
+#                                          its figures), then the comparison and the status box
 #   bash docs/results/update.sh --status   only rewrite the README's status box from the files
 #                                          present in docs/results/
 #   bash docs/results/update.sh --check    only check that the README's status box is what
@@ -165,6 +168,9 @@ run_all() {
   for entry in "${SWEEPS[@]}"; do
     name="${entry%%|*}"
     args="${entry##*|}"
+    if [ -n "${ONLY:-}" ] && [ "$name" != "$ONLY" ]; then
+      continue
+    fi
     rm -rf "${RESULTS:?}/$name"
     date="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
     echo "update.sh: explobot sweep $args --out $RESULTS/$name"
@@ -206,11 +212,21 @@ run_all() {
 
 case "${1:-}" in
   "") run_all ;;
+  --only)
+    ONLY="${2:-}"
+    known=0
+    for entry in "${SWEEPS[@]}"; do [ "${entry%%|*}" = "$ONLY" ] && known=1; done
+    if [ "$known" = 0 ]; then
+      echo "update.sh: --only needs one of: $(for e in "${SWEEPS[@]}"; do printf '%s ' "${e%%|*}"; done)" >&2
+      exit 2
+    fi
+    run_all
+    ;;
   --status) write_status ;;
   --check) check_status ;;
   -h | --help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//' ;;
   *)
-    echo "usage: bash docs/results/update.sh [--status | --check]" >&2
+    echo "usage: bash docs/results/update.sh [--only NAME | --status | --check]" >&2
     exit 2
     ;;
 esac
