@@ -125,6 +125,17 @@ pub struct LocaliserCounters {
     pub touches: u64,
 }
 
+impl LocaliserCounters {
+    /// Counts one range's outcome.
+    fn count(&mut self, update: &RangeUpdate) {
+        match update {
+            RangeUpdate::Applied { .. } => self.applied += 1,
+            RangeUpdate::Rejected { .. } => self.rejected += 1,
+            RangeUpdate::NoSurface => self.unmatched += 1,
+        }
+    }
+}
+
 /// A straight reading at rest: where it was taken, the depth along the heading of the surface it
 /// heard, and the variance of the position along the heading then.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -282,11 +293,7 @@ impl Localiser {
             ?update,
             "range at rest"
         );
-        match update {
-            RangeUpdate::Applied { .. } => self.counters.applied += 1,
-            RangeUpdate::Rejected { .. } => self.counters.rejected += 1,
-            RangeUpdate::NoSurface => self.counters.unmatched += 1,
-        }
+        self.counters.count(&update);
         let depth_m = u.0 * filter.mean().x + u.1 * filter.mean().y + ahead;
         let placed_var_m2 = filter.variance_along(u);
         if range <= WALL_MAX_M && !matched_wall {
@@ -366,11 +373,7 @@ impl Localiser {
             ?update,
             "range looking aside"
         );
-        match update {
-            RangeUpdate::Applied { .. } => self.counters.applied += 1,
-            RangeUpdate::Rejected { .. } => self.counters.rejected += 1,
-            RangeUpdate::NoSurface => self.counters.unmatched += 1,
-        }
+        self.counters.count(&update);
         self.finish(now, believed, reading)
     }
 
