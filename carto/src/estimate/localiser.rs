@@ -548,9 +548,6 @@ mod tests {
         assert!((dx - 0.05).abs() < 0.015, "{dx}");
     }
 
-    /// Gen pillars 40, seed 1, room known: ranges expected from rays the sonar does not have
-    /// (a 7-ray fan against the profile's 5) met pillar edges the sensor's rays miss, and each
-    /// difference, on an oblique surface, pulled the belief 2 cm sideways, to 10 cm off.
     #[test]
     fn a_look_aside_corrects_across_the_heading_against_the_plan() {
         let mut loc = Localiser::new(&CartoConfig::default());
@@ -596,6 +593,9 @@ mod tests {
         assert_eq!(loc.at_look(ms(1000), look, Reading::Echo(0.5)), (0.0, 0.0));
     }
 
+    /// Gen pillars 40, seed 1, room known: ranges expected from rays the sonar does not have
+    /// (a 7-ray fan against the profile's 5) met pillar edges the sensor's rays miss, and each
+    /// difference, on an oblique surface, pulled the belief 2 cm sideways, to 10 cm off.
     #[test]
     fn a_known_room_expects_each_range_from_the_rays_the_sensor_model_casts() {
         let profile = robot_model::profile::RobotProfile::default();

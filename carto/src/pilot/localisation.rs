@@ -8,6 +8,7 @@
 //! the localiser's surfaces, the last straight reading and the way the body came.
 
 use robot_model::grid::{GridPose, Heading, Move};
+use robot_model::time::Instant;
 
 use super::Io;
 use super::safety::LOOK_ASIDE_SIGMA_M;
@@ -187,15 +188,12 @@ impl Localisation {
         correct_odometry(io, pose, fix)
     }
 
-    /// Whether a look aside is due before the next FORWARD (`pilot/safety.rs`, "Looking
-    /// aside"): a floor plan is given and the belief's standard deviation across the heading
-    /// exceeds [`LOOK_ASIDE_SIGMA_M`].
-    pub(super) fn wants_look_aside(&self, io: &Io<'_>) -> bool {
+    /// Whether a look aside is due at `now` before the next FORWARD from `robot`, the believed
+    /// pose (`pilot/safety.rs`, "Looking aside"): a floor plan is given and the belief's
+    /// standard deviation across the heading exceeds [`LOOK_ASIDE_SIGMA_M`].
+    pub(super) fn wants_look_aside(&self, now: Instant, robot: Pose2) -> bool {
         self.localiser.has_plan()
-            && self
-                .believed(io)
-                .and_then(|robot| self.localiser.sigma_across_m(io.now, robot))
-                .is_some_and(|sigma| sigma > LOOK_ASIDE_SIGMA_M)
+            && self.localiser.sigma_across_m(now, robot).is_some_and(|sigma| sigma > LOOK_ASIDE_SIGMA_M)
     }
 
     /// Corrects the belief from the reading `cm` taken at rest looking aside (the body turned off

@@ -251,7 +251,7 @@ impl Pilot {
         self.looking_aside = None;
         let Some(robot) = self.place.believed(io) else { return };
         if self.safety.scan_deg > 0.0
-            || !self.place.wants_look_aside(io)
+            || !self.place.wants_look_aside(io.now, robot)
             || self.echoes.in_turning_circle(robot).is_some()
         {
             return;
