@@ -11,12 +11,17 @@ use robot_model::grid::{GridPose, Heading, Move};
 use robot_model::time::Instant;
 
 use super::Io;
-use super::safety::LOOK_ASIDE_SIGMA_M;
 use crate::CartoConfig;
 use crate::estimate::localiser::Localiser;
 use crate::estimate::sonar::Reading;
 use crate::odometry::CellOffset;
 use crate::surroundings::Pose2;
+
+/// The belief's standard deviation across the heading above which, with a floor plan, Carto
+/// looks aside before a FORWARD (`pilot/safety.rs`, "Looking aside"): a third of the 5 cm a
+/// run's belief may be off (`RobotProfile`'s `belief_error_max_m`), so the error stays inside it
+/// at 3 σ.
+pub(super) const LOOK_ASIDE_SIGMA_M: f64 = 0.05 / 3.0;
 
 /// A grid heading as a counter-clockwise angle from east, degrees.
 pub(super) fn heading_deg(h: Heading) -> f64 {

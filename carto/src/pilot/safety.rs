@@ -59,8 +59,9 @@
 //!   error), and nothing corrects it until the robot faces another way. With a floor plan (the
 //!   twin's `--known-room`) a surface beside the row can be asked instead: when, after the
 //!   straight reading at rest has cleared a FORWARD, the belief's standard deviation across the
-//!   heading exceeds [`LOOK_ASIDE_SIGMA_M`] (a third of the 5 cm a run's belief may be off), no
-//!   scan is configured and the turning circle holds no known echo, the robot turns
+//!   heading exceeds [`super::localisation::LOOK_ASIDE_SIGMA_M`] (a third of the 5 cm a run's
+//!   belief may be off), no scan is configured and the turning circle holds no known echo, the
+//!   robot turns
 //!   [`LOOK_ASIDE_DEG`] towards the side where the plan puts the nearer echo (within
 //!   [`crate::estimate::localiser::LOOK_ASIDE_MAX_M`]; neither side has one: no look), takes one
 //!   reading at rest, corrects the belief from it against the plan
@@ -151,11 +152,6 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
 /// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
 pub(super) const ASIDE_STEP_M: f64 = 0.0025;
-
-/// The belief's standard deviation across the heading above which, with a floor plan, Carto
-/// looks aside before a FORWARD (module docs, "Looking aside"): a third of the 5 cm a run's
-/// belief may be off (`RobotProfile`'s `belief_error_max_m`), so the error stays inside it at 3 σ.
-pub(super) const LOOK_ASIDE_SIGMA_M: f64 = 0.05 / 3.0;
 
 /// How far each way a look aside turns the body, degrees: a range taken there measures the
 /// position mostly across the heading (sin 60° = 0.87 of it).
