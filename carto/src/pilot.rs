@@ -495,6 +495,19 @@ impl Pilot {
         }
     }
 
+    /// A FORWARD refused because the body's way to the next centre is not clear of its width
+    /// (an echo point in the corridor, `pilot/safety.rs`), while no reading at rest put anything
+    /// straight ahead within the threshold. The reply is the 2024 one, SET_OBSTACLE_POSITION
+    /// with the cell ahead, followed by SET_ROBOT_POSITION with the cell the robot stays in:
+    /// the move is blocked, but nothing says the cell ahead is occupied, so Cute keeps it unknown
+    /// and may reach it another way (`protocol/README.md`, "Refused FORWARD").
+    fn report_way_not_clear(&mut self) {
+        self.report_obstacle();
+        if let Some(p) = self.place.pose() {
+            self.replies.push(Reply::RobotPosition { x: p.x, y: p.y });
+        }
+    }
+
     /// A turn failed part way: the body faces between two grid headings while the stored pose
     /// keeps the old one. Turning back makes them agree again (the next move then holds a grid
     /// heading, not the angle the body jammed at); the task ends with `MOVE_DONE` after it. Cute

@@ -23,9 +23,12 @@
 //! *move* is recorded blocked on the map, both ways ([`Map::note_refused_forward`]), and A* and
 //! the unreachable flood go round it; other ways into the cell stay open. A blocked move is not
 //! tried again until the map is reset: the sweep must end, and Carto would refuse it again for
-//! the same echo. A FORWARD refused into a cell nobody has stood in still makes the cell an
-//! obstacle: one refusal cannot tell a thin wall from a box, so that cell is not entered from
-//! elsewhere either.
+//! the same echo. A FORWARD refused into a cell nobody has stood in makes the cell an obstacle
+//! when Carto met something in it (a reading straight ahead, a contact): one refusal cannot tell
+//! a thin wall from a box, so that cell is not entered from elsewhere either. When Carto says
+//! only that the robot's way is not clear ([`MoveResult::WayNotClear`]), nothing says the cell
+//! is occupied: the move is blocked, the cell stays unknown, and the sweep may reach it another
+//! way ([`Map::note_way_not_clear`]); once every way in is blocked, the flood below ends it.
 //!
 //! Unreachable cells: if A* finds no path through free and unknown cells, the target cannot be
 //! reached (every truly free cell is known free or unknown, so no real path exists). A flood from
@@ -92,6 +95,15 @@ pub enum MoveResult {
         /// Column.
         y: u8,
     },
+    /// FORWARD refused because the robot's way into cell `(x, y)` is not clear of its width,
+    /// with nothing placed in the cell itself; the robot did not move (SET_OBSTACLE_POSITION,
+    /// then SET_ROBOT_POSITION with the robot's own cell: `protocol/README.md`).
+    WayNotClear {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+    },
     /// RIGHT or LEFT was executed (MOVE_DONE alone after a turn).
     Turned,
     /// Carto answered MOVE_DONE without doing anything (e.g. it had no pose yet).
@@ -133,7 +145,7 @@ pub struct CartoStats {
     pub forwards: u64,
     /// RIGHTs and LEFTs issued.
     pub turns: u64,
-    /// FORWARDs answered with an obstacle.
+    /// FORWARDs answered with an obstacle or a way not clear.
     pub bumps: u64,
     /// A* searches run for detours.
     pub searches: u64,
@@ -147,7 +159,8 @@ pub struct CartoStats {
     pub turns_failed: u64,
     /// FORWARDs sent only because no turn towards the planned cell was left in the robot's cell.
     pub turn_escapes: u64,
-    /// Moves remembered as blocked: a FORWARD refused into a cell the robot had stood in.
+    /// Moves remembered as blocked: a FORWARD refused into a cell the robot had stood in, or
+    /// whose way was not clear.
     pub blocked_moves: u64,
 }
 
@@ -521,15 +534,20 @@ impl Cartographer {
                 }
                 self.pose = (x, y);
             }
-            MoveResult::Blocked { x, y } => {
+            MoveResult::Blocked { x, y } | MoveResult::WayNotClear { x, y } => {
                 self.stats.bumps += 1;
                 self.follow_reply((x, y));
                 self.unconfirmed_turns.clear();
                 self.refused_forwards = 0;
                 // Outside the map nothing is written, and needs not be: it is never planned.
-                if map.note_refused_forward(self.pose, (x, y)) == (Refusal::MoveBlocked { new: true }) {
+                let refusal = if matches!(result, MoveResult::WayNotClear { .. }) {
+                    map.note_way_not_clear(self.pose, (x, y))
+                } else {
+                    map.note_refused_forward(self.pose, (x, y))
+                };
+                if refusal == (Refusal::MoveBlocked { new: true }) {
                     self.stats.blocked_moves += 1;
-                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell stays free");
+                    debug!(from = ?self.pose, to = ?(x, y), "move blocked; the cell keeps its value");
                 }
                 self.plan.clear();
             }

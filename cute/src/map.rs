@@ -9,9 +9,10 @@
 //! (grows rightward), origin top-left, one byte each.
 //!
 //! Besides the cells, the map keeps the **blocked moves**: pairs of neighbouring cells the robot
-//! cannot drive between although it has stood in both (a thin wall on the cell line, a leg on
-//! the corner). [`Map::note_refused_forward`] is the one rule that turns a refused FORWARD into
-//! a blocked move or an obstacle; A* plans round both ([`crate::trajectory::fill_grid`]).
+//! cannot drive between, either although it has stood in both (a thin wall on the cell line, a
+//! leg on the corner) or because Carto found the way between them not clear of the body. [`Map::note_refused_forward`] and
+//! [`Map::note_way_not_clear`] are the rules that turn a refused FORWARD into a blocked move or an
+//! obstacle; A* plans round both ([`crate::trajectory::fill_grid`]).
 //!
 //! Invariants: at most one cell holds [`CellValue::Robot`] and it is [`Map::robot`]; at most one
 //! holds [`CellValue::Destination`] and it is [`Map::destination`]; cells are stored and iterated
@@ -197,11 +198,11 @@ pub struct Map {
     blocked_moves: BTreeSet<((u8, u8), (u8, u8))>,
 }
 
-/// What [`Map::note_refused_forward`] concluded.
+/// What [`Map::note_refused_forward`] or [`Map::note_way_not_clear`] concluded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Refusal {
-    /// The cell ahead is known free (the robot stood there): the move is blocked, the cell stays
-    /// free. `new` is false if the move was already known blocked.
+    /// The move is blocked and the cell keeps its value (it is known free, the robot stood
+    /// there, or the way was not clear). `new` is false if the move was already known blocked.
     MoveBlocked {
         /// First time this move is blocked.
         new: bool,
@@ -423,6 +424,21 @@ impl Map {
         }
         match self.set_obstacle(usize::from(ahead.0), usize::from(ahead.1)) {
             Ok(()) => Refusal::Obstacle,
+            Err(_) => Refusal::Nothing,
+        }
+    }
+
+    /// Carto refused a FORWARD from `from` into its neighbour `ahead` because the robot's way
+    /// there is not clear of its width, with nothing placed in `ahead` itself
+    /// ([`crate::cartography::MoveResult::WayNotClear`]). The move is blocked whatever the cell
+    /// holds, and the cell keeps its value: an unknown cell may still be reached another way.
+    /// The robot's own cell and cells off the map are left alone.
+    pub fn note_way_not_clear(&mut self, from: (u8, u8), ahead: (u8, u8)) -> Refusal {
+        if ahead == from {
+            return Refusal::Nothing;
+        }
+        match self.block_move(from, ahead) {
+            Ok(new) => Refusal::MoveBlocked { new },
             Err(_) => Refusal::Nothing,
         }
     }

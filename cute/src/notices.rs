@@ -77,6 +77,10 @@ pub fn describe(event: &CuteEvent) -> String {
             "the robot faces {faced}: Carto did not make the last turn (it refuses a turn that would \
              touch something it has seen); following the robot"
         ),
+        CuteEvent::WayNotClear { x, y } => format!(
+            "Carto did not drive into ({x}, {y}): the way there is not clear of the robot's width; \
+             that move is blocked, the cell is not marked as an obstacle"
+        ),
         CuteEvent::Stopped => "stopped".to_string(),
         CuteEvent::ProtocolError { message, fatal } => {
             format!("protocol error{}: {message}", if *fatal { " (fatal)" } else { "" })
@@ -119,6 +123,13 @@ mod tests {
         assert_eq!(popup_for(&dropped).map(|p| p.title), Some("Batch dropped".to_string()));
         assert_eq!(popup_for(&CuteEvent::CompatHint).map(|p| p.title), Some("Carto does not answer".into()));
         assert!(!is_warning(&CuteEvent::Connected));
+    }
+
+    #[test]
+    fn a_way_not_clear_says_why_and_that_the_cell_is_not_an_obstacle() {
+        let text = describe(&CuteEvent::WayNotClear { x: 2, y: 4 });
+        assert!(text.starts_with("Carto did not drive into (2, 4)") && text.contains("not clear"), "{text}");
+        assert!(text.contains("not marked as an obstacle"), "{text}");
     }
 
     #[test]

@@ -28,6 +28,10 @@ struct ScriptedCarto {
     /// Turns to refuse from now on (answered with MOVE_DONE only, heading unchanged), as our
     /// Carto does with a turn whose swept body would touch an echo it knows.
     refuse_turns: u32,
+    /// Moves between neighbours (either way) whose way is not clear: a FORWARD along one is
+    /// refused as our Carto refuses a corridor that is too narrow, SET_OBSTACLE_POSITION with
+    /// the cell ahead then SET_ROBOT_POSITION with the robot's own cell.
+    narrow: Vec<((u8, u8), (u8, u8))>,
     /// Frames received, for assertions.
     seen: Vec<GuiMessage>,
     orders: Vec<MsgOrder>,
@@ -44,6 +48,7 @@ impl ScriptedCarto {
             unsolicited_rpr: false,
             silent_trajectories: false,
             refuse_turns: 0,
+            narrow: Vec::new(),
             seen: Vec::new(),
             orders: Vec::new(),
         }
@@ -62,6 +67,13 @@ impl ScriptedCarto {
             Move::Forward => {
                 let ahead = h.step(cell, self.world.rows(), self.world.cols());
                 match ahead {
+                    Some(n)
+                        if self.narrow.iter().any(|&(a, b)| (a, b) == (cell, n) || (b, a) == (cell, n)) =>
+                    {
+                        self.reply(GuiMessage::SetObstaclePosition { x: n.0, y: n.1 });
+                        self.reply(GuiMessage::SetRobotPosition { x: cell.0, y: cell.1 });
+                        false
+                    }
                     Some(n) if !self.world.is_blocked(n.0.into(), n.1.into()) => {
                         self.pose = Some((n, h));
                         self.reply(GuiMessage::SetRobotPosition { x: n.0, y: n.1 });
@@ -335,6 +347,66 @@ fn obstacle_during_a_trajectory_aborts_and_is_marked() {
     let (x, y, h) = cute.robot();
     assert_eq!(((x, y), h), carto.true_pose());
     assert_ne!((x, y), (rx, ry), "the robot moved before meeting the box");
+}
+
+/// A FORWARD refused because the way is not clear (issue 42, item 4): Cute blocks that move,
+/// keeps the cell unknown, maps it from another side and never marks it as an obstacle.
+#[test]
+fn a_way_not_clear_blocks_the_move_and_the_cell_is_mapped_another_way() {
+    let mut cute = Cute::new(config((0, 0), Heading::East)).unwrap();
+    let mut carto = ScriptedCarto::new(ROOM);
+    carto.narrow = vec![((0, 0), (0, 1))];
+    let (mut now, mut ch) = (Instant::ZERO, Chunker(11));
+    cute.on_connected(now);
+    cute.start_cartography().unwrap();
+    exchange(&mut cute, &mut carto, &mut now, &mut ch);
+    assert_eq!(cute.status(), Status::Done);
+    let events = cute.take_events();
+    assert!(events.contains(&CuteEvent::WayNotClear { x: 0, y: 1 }), "{events:?}");
+    let world = World::parse(ROOM).unwrap();
+    for ((x, y), v) in cute.map().iter() {
+        assert_eq!(v.is_known_free(), !world.is_blocked(x.into(), y.into()), "cell ({x}, {y}) is {v:?}");
+    }
+    assert!(cute.map().is_move_blocked((0, 0), (0, 1)));
+    assert_eq!(cute.counters().unsolicited, 0, "the pair answers the FORWARD");
+    let (x, y, h) = cute.robot();
+    assert_eq!(((x, y), h), carto.true_pose());
+}
+
+/// The same refusal during a trajectory ends it, as an obstacle does, but the cell keeps what
+/// the map held (free) and only the move is blocked.
+#[test]
+fn a_way_not_clear_ends_a_trajectory_without_marking_the_cell() {
+    let (mut cute, mut carto, mut now, mut ch) = mapped_session(ROOM, 5, 8);
+    let (rx, ry, _) = cute.robot();
+    cute.go_to(3, 0).unwrap();
+    let path: Vec<(u8, u8)> =
+        cute.map().iter().filter(|(_, v)| *v == CellValue::Waypoint).map(|(c, _)| c).collect();
+    assert!(path.len() >= 2, "{path:?}");
+    // the way into the second waypoint is not clear; the robot stops in the first
+    let (first, second) = (path_order(&path, (rx, ry))[0], path_order(&path, (rx, ry))[1]);
+    carto.narrow = vec![(first, second)];
+    exchange(&mut cute, &mut carto, &mut now, &mut ch);
+    assert_eq!(cute.status(), Status::Idle);
+    let events = cute.take_events();
+    assert!(events.contains(&CuteEvent::WayNotClear { x: second.0, y: second.1 }), "{events:?}");
+    assert_eq!(cute.map().get(second.0.into(), second.1.into()), Some(CellValue::Free));
+    assert!(cute.map().is_move_blocked(first, second));
+    let (x, y, h) = cute.robot();
+    assert_eq!(((x, y), h), carto.true_pose());
+    assert_eq!((x, y), first);
+}
+
+/// The waypoints of `path` in the order a robot starting at `from` meets them (each next to
+/// the one before).
+fn path_order(path: &[(u8, u8)], from: (u8, u8)) -> Vec<(u8, u8)> {
+    let mut order = Vec::new();
+    let mut at = from;
+    while let Some(&n) = path.iter().find(|&&c| !order.contains(&c) && Heading::between(at, c).is_some()) {
+        order.push(n);
+        at = n;
+    }
+    order
 }
 
 #[test]

@@ -18,8 +18,12 @@
 //!   The reason: a passage that leaves the body less than the clearance at the centre, but
 //!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
 //!   the robot that came through it one way was refused the way back, a trap Cute could not
-//!   leave. When no track clears, Carto answers `SET_OBSTACLE_POSITION` for the cell ahead, as
-//!   for a close straight echo.
+//!   leave. When no track clears, the answer says what the point is evidence of. A point inside
+//!   the body standing at the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`,
+//!   as for a close straight echo. A point anywhere else in the corridor (on the way, or within
+//!   the clearance beside the body) says only that the way is not clear:
+//!   `SET_OBSTACLE_POSITION`, then `SET_ROBOT_POSITION` with the robot's own cell, which Cute
+//!   reads as a blocked move, the cell left unknown (`protocol/README.md`, "Refused FORWARD").
 //! - **Footprint.** Before every reading at rest and every turn check, the points inside the
 //!   body's rectangle where Carto believes it stands are forgotten, the echoes heard moving
 //!   (below) too ([`crate::surroundings::Surroundings::clear_footprint`]).
@@ -514,7 +518,16 @@ impl Pilot {
                             "echo in the body's path: no motion"
                         );
                         self.counters.corridor_blocked += 1;
-                        self.report_obstacle();
+                        // inside the body standing at the next centre, the cell is occupied;
+                        // anywhere else in the corridor only the way there is not clear
+                        let centre_along_m = s.cell_m - off.along_m;
+                        let in_footprint = (hit.at.0 - centre_along_m).abs() <= s.half_length_m
+                            && (hit.at.1 + off.left_m).abs() <= s.half_width_m;
+                        if in_footprint {
+                            self.report_obstacle();
+                        } else {
+                            self.report_way_not_clear();
+                        }
                         return self.end_task(io.now);
                     }
                 }

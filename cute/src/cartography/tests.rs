@@ -217,6 +217,38 @@ fn a_refused_forward_into_an_unknown_cell_marks_an_obstacle() {
     assert_eq!(map.blocked_moves().count(), 0);
 }
 
+/// A FORWARD Carto refused only because the way was not clear leaves the cell unknown: the
+/// sweep reaches it another way, and the map shows it free, not an obstacle.
+#[test]
+fn a_way_not_clear_blocks_the_move_and_the_cell_is_reached_another_way() {
+    // 2 x 2, the robot in (0, 0) facing EAST: the way (0, 0) -> (0, 1) is not clear
+    let mut map = Map::new(2, 2).unwrap();
+    map.set_robot(0, 0).unwrap();
+    let mut c = Cartographer::new(2, 2, (0, 0), Heading::East).unwrap();
+    assert_eq!(c.next_command(&map), Some(Move::Forward));
+    c.on_result(&mut map, MoveResult::WayNotClear { x: 0, y: 1 });
+    assert_eq!(map.at((0, 1)), Some(CellValue::Unknown), "nothing says the cell is occupied");
+    assert_eq!(map.blocked_moves().collect::<Vec<_>>(), vec![((0, 0), (0, 1))]);
+    let narrow = |a: (u8, u8), b: (u8, u8)| a.min(b) == (0, 0) && a.max(b) == (0, 1);
+    let forwards = drive(&mut c, &mut map, |a, b| !narrow(a, b));
+    assert_eq!(forwards, vec![((0, 0), (1, 0)), ((1, 0), (1, 1)), ((1, 1), (0, 1))], "round, then in");
+    assert_eq!(map.to_text(), "15\n11\n");
+    assert!(c.unreachable_cells().is_empty());
+}
+
+/// When every way into a cell was found not clear, the cell is unreachable and stays unknown.
+#[test]
+fn a_cell_whose_every_way_is_not_clear_is_unreachable_and_stays_unknown() {
+    let mut map = Map::new(1, 2).unwrap();
+    map.set_robot(0, 0).unwrap();
+    let mut c = Cartographer::new(1, 2, (0, 0), Heading::East).unwrap();
+    assert_eq!(c.next_command(&map), Some(Move::Forward));
+    c.on_result(&mut map, MoveResult::WayNotClear { x: 0, y: 1 });
+    assert_eq!(c.next_command(&map), None);
+    assert_eq!(c.unreachable_cells(), vec![(0, 1)]);
+    assert_eq!(map.to_text(), "52\n");
+}
+
 #[test]
 fn a_move_reply_sets_the_heading_to_the_direction_travelled() {
     let mut map = Map::new(3, 3).unwrap();

@@ -112,3 +112,16 @@ fn text_round_trip_and_errors() {
     assert_eq!(text, "line 2, column 2: 'x' is not a cell value (0..=5)");
     assert!(matches!(Map::parse(""), Err(MapError::BadSize { .. })));
 }
+
+#[test]
+fn a_way_not_clear_blocks_the_move_and_keeps_the_cell_unknown() {
+    let mut map = Map::new(1, 3).unwrap();
+    map.set_robot(0, 0).unwrap();
+    assert_eq!(map.note_way_not_clear((0, 0), (0, 1)), Refusal::MoveBlocked { new: true });
+    assert_eq!(map.note_way_not_clear((0, 1), (0, 0)), Refusal::MoveBlocked { new: false });
+    assert_eq!(map.get(0, 1), Some(CellValue::Unknown));
+    assert!(map.is_move_blocked((0, 0), (0, 1)) && !map.is_move_blocked((0, 1), (0, 2)));
+    assert_eq!(map.note_way_not_clear((0, 0), (0, 2)), Refusal::Nothing, "not neighbours");
+    assert_eq!(map.note_way_not_clear((0, 2), (0, 3)), Refusal::Nothing, "off the map");
+    assert_eq!(map.note_way_not_clear((0, 0), (0, 0)), Refusal::Nothing, "the robot's cell");
+}

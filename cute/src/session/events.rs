@@ -131,6 +131,15 @@ pub enum CuteEvent {
         /// The heading the reply shows.
         faced: Heading,
     },
+    /// Carto did not drive into `(x, y)`: the robot's way there is not clear of its width,
+    /// though nothing was met in the cell itself. The move is blocked; the cell keeps what the
+    /// map held (unknown stays unknown), so cartography may reach it another way.
+    WayNotClear {
+        /// Row.
+        x: u8,
+        /// Column.
+        y: u8,
+    },
     /// The user pressed STOP.
     Stopped,
     /// A frame could not be decoded; `fatal` means the connection is dropped.

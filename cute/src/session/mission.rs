@@ -194,6 +194,22 @@ impl Mission {
         }
     }
 
+    /// SET_ROBOT_POSITION with the robot's own cell right after SET_OBSTACLE_POSITION `at`:
+    /// Carto refused the FORWARD because the way into `at` is not clear, and nothing says `at`
+    /// is occupied (`protocol/README.md`). True if it is the answer of the cartography move in
+    /// flight (applied at MOVE_DONE); false otherwise (a trajectory already ended on it).
+    pub(crate) fn on_way_not_clear(&mut self, at: (u8, u8)) -> bool {
+        match self {
+            Mission::Mapping(Mapping { flight: Some(f), .. })
+                if f.result == Some(MoveResult::Blocked { x: at.0, y: at.1 }) =>
+            {
+                f.result = Some(MoveResult::WayNotClear { x: at.0, y: at.1 });
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// SET_OBSTACLE_POSITION `(x, y)`.
     pub(crate) fn on_obstacle(&mut self, belief: &mut Belief, x: u8, y: u8) -> Obstacle {
         match self {
@@ -328,6 +344,9 @@ impl Mapping {
             MoveResult::Moved { x, y } => belief.set_robot((x, y)),
             MoveResult::Turned => belief.heading = belief.heading.after(command),
             MoveResult::Blocked { x, y } => belief.mark_obstacle(x, y),
+            MoveResult::WayNotClear { x, y } => {
+                let _ = belief.map.note_way_not_clear(belief.robot, (x, y));
+            }
             MoveResult::NotExecuted => {}
         }
         self.carto.cancel_pending();

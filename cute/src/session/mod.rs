@@ -108,6 +108,10 @@ pub struct Cute {
     /// Cells of the painted trajectory that were unknown before (compat): unknown again when
     /// the trajectory is cleared.
     unknown_path: Vec<(u8, u8)>,
+    /// The last message was SET_OBSTACLE_POSITION: its cell and what the map held there before.
+    /// A SET_ROBOT_POSITION next to it right after says the way was not clear
+    /// ([`CuteEvent::WayNotClear`]).
+    last_obstacle: Option<((u8, u8), CellValue)>,
 }
 
 impl Cute {
@@ -144,6 +148,7 @@ impl Cute {
             last_carto_stats: None,
             quirks: Quirks::default(),
             unknown_path: Vec::new(),
+            last_obstacle: None,
         })
     }
 
@@ -503,8 +508,27 @@ impl Cute {
         }
     }
 
+    /// Carto refused a FORWARD from `robot` into `cell` because the way is not clear (the pair
+    /// SET_OBSTACLE_POSITION, SET_ROBOT_POSITION). In cartography the move's result says so; a
+    /// trajectory has already ended on the obstacle, so the cell gets back what it held and the
+    /// move is blocked.
+    fn way_not_clear(&mut self, robot: (u8, u8), cell: (u8, u8), before: CellValue) {
+        self.events.push(CuteEvent::WayNotClear { x: cell.0, y: cell.1 });
+        if self.mission.on_way_not_clear(cell) {
+            return;
+        }
+        // a painted trajectory is cleared by now: its cells were known free
+        let before = if before.is_known_free() { CellValue::Free } else { before };
+        if self.belief.map.at(cell) == Some(CellValue::Obstacle) && before != CellValue::Obstacle {
+            let _ = self.belief.map.set(usize::from(cell.0), usize::from(cell.1), before);
+        }
+        self.belief.set_robot(robot);
+        let _ = self.belief.map.note_way_not_clear(robot, cell);
+    }
+
     fn handle(&mut self, msg: GuiMessage) {
         debug!(?msg, "from Carto");
+        let last_obstacle = self.last_obstacle.take();
         match msg {
             GuiMessage::RobotPositionReceived => {
                 self.quirks.position_answered();
@@ -519,6 +543,11 @@ impl Cute {
                     warn!(x, y, "robot position outside the map; ignored");
                     return;
                 }
+                if let Some((cell, before)) = last_obstacle
+                    && Heading::between((x, y), cell).is_some()
+                {
+                    return self.way_not_clear((x, y), cell, before);
+                }
                 if !self.mission.on_position(&mut self.belief, x, y) {
                     self.counters.unsolicited += 1;
                     self.belief.set_robot((x, y));
@@ -526,6 +555,7 @@ impl Cute {
             }
             GuiMessage::SetObstaclePosition { x, y } => {
                 self.counters.obstacles += 1;
+                self.last_obstacle = self.belief.map.at((x, y)).map(|before| ((x, y), before));
                 match self.mission.on_obstacle(&mut self.belief, x, y) {
                     Obstacle::Recorded => {}
                     Obstacle::Aborted => {
