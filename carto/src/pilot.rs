@@ -85,6 +85,7 @@ mod commands;
 mod echoes;
 mod forward;
 mod interface;
+mod limits;
 mod localisation;
 mod safety;
 mod session;
@@ -94,8 +95,8 @@ mod tasks;
 
 use echoes::Echoes;
 use forward::ForwardWatch;
+use limits::Safety;
 use localisation::Localisation;
-use safety::Safety;
 use stall::Stall;
 use tasks::{Next, Tasks};
 

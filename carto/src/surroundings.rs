@@ -226,10 +226,23 @@ impl Surroundings {
         to_m: f64,
         half_width_m: f64,
     ) -> Option<(f64, f64)> {
+        self.first_in_strip(robot, (from_m, to_m), (-half_width_m, half_width_m))
+    }
+
+    /// The nearest point, as `(along, left)` from `robot`, with `along` in `along_m` and `left`
+    /// in `left_m` (both inclusive ranges, smaller bound first).
+    pub fn first_in_strip(
+        &self,
+        robot: Pose2,
+        along_m: (f64, f64),
+        left_m: (f64, f64),
+    ) -> Option<(f64, f64)> {
         let local = robot.localiser();
         self.all()
             .map(|&p| local(p))
-            .filter(|&(along, left)| along >= from_m && along <= to_m && left.abs() <= half_width_m)
+            .filter(|&(along, left)| {
+                along >= along_m.0 && along <= along_m.1 && left >= left_m.0 && left <= left_m.1
+            })
             .min_by(|a, b| a.0.total_cmp(&b.0))
     }
 

@@ -10,11 +10,11 @@
 
 use robot_model::time::Instant;
 
-use super::safety::{ASIDE_STEP_M, FAR_SIGMAS, Safety};
+use super::limits::{ASIDE_STEP_M, FAR_SIGMAS, Safety};
 use crate::odometry::CellOffset;
 use crate::surroundings::{Pose2, Surroundings};
 
-/// Where an echo in a FORWARD's corridor lies ([`Echoes::in_corridor`]).
+/// Where an echo in a FORWARD's corridor lies ([`Echoes::in_way`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Hit {
     /// Ahead of and left of the robot, metres.
@@ -115,15 +115,25 @@ impl Echoes {
         self.moving.add_echo(farther, 0.0, range);
     }
 
-    /// The first echo in the corridor from the sonar to `to_m` ahead of `robot`, `half_m` either
-    /// side: one heard at rest first, else one heard moving.
-    pub(super) fn in_corridor(&self, robot: Pose2, to_m: f64, half_m: f64) -> Option<Hit> {
-        let mount_m = self.safety.mount_m;
-        if let Some(at) = self.at_rest.first_in_corridor(robot, mount_m, to_m, half_m) {
+    /// The first echo in the way of a FORWARD from `robot` to `to_m` ahead that ends on a track
+    /// `track_m` left of it: one heard at rest first, else one heard moving. The way is the
+    /// corridor from the sonar to `to_m`, `half_m` either side, and, when the body must strafe
+    /// to its track (the motor holds the track while driving), the strip its flank sweeps getting
+    /// there, from its back face on (`pilot/safety.rs`, "Corridor").
+    pub(super) fn in_way(&self, robot: Pose2, to_m: f64, half_m: f64, track_m: f64) -> Option<Hit> {
+        let s = self.safety;
+        let strafe = if track_m > 0.0 { (half_m, track_m + half_m) } else { (track_m - half_m, -half_m) };
+        let first = |points: &Surroundings| {
+            points.first_in_corridor(robot, s.mount_m, to_m, half_m).or_else(|| {
+                (track_m != 0.0)
+                    .then(|| points.first_in_strip(robot, (-s.half_length_m, to_m), strafe))
+                    .flatten()
+            })
+        };
+        if let Some(at) = first(&self.at_rest) {
             return Some(Hit { at, heard_moving: false });
         }
-        let at = self.moving.first_in_corridor(robot, mount_m, to_m, half_m)?;
-        Some(Hit { at, heard_moving: true })
+        Some(Hit { at: first(&self.moving)?, heard_moving: true })
     }
 
     /// Keeps the echo heard moving at `at` (ahead, left of `robot`) from now on as if heard at
@@ -146,9 +156,13 @@ impl Echoes {
             // the track is checked from the body's back face, beside it too
             let (x, y) = robot.offset(0.0, track - left_m);
             let on_track = Pose2 { x, y, ..robot };
-            [&self.at_rest, &self.moving]
-                .iter()
-                .all(|points| points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none())
+            let strafe = (track - left_m).abs();
+            let beside = if track > left_m { (half_m, strafe + half_m) } else { (-strafe - half_m, -half_m) };
+            [&self.at_rest, &self.moving].iter().all(|points| {
+                points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none()
+                    && (strafe == 0.0
+                        || points.first_in_strip(robot, (-s.half_length_m, to_m), beside).is_none())
+            })
         })
     }
 
@@ -187,5 +201,35 @@ impl Echoes {
             })
             .last()
             .unwrap_or(0.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use crate::CartoConfig;
+
+    /// A robot 8 cm right of the line through the centres, facing east at the origin, and a
+    /// known point 30 cm ahead and 18 cm left of it: outside the corridor ahead of the body
+    /// (14 cm either side), but in the way of the body strafing back to the line while it drives.
+    #[test]
+    fn the_way_of_a_forward_includes_the_strip_the_body_strafes_through_to_its_track() {
+        let cfg = CartoConfig::default();
+        let mut echoes = Echoes::new(Safety::new(&cfg));
+        echoes.add_fixed(vec![(0.30, 0.18)]);
+        let robot = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        let (to, half) = (0.45 + 0.13, 0.12 + 0.02);
+        assert!(echoes.in_way(robot, to, half, 0.0).is_none(), "straight ahead, the way is clear");
+        let hit = echoes.in_way(robot, to, half, 0.08).unwrap();
+        assert!((hit.at.0 - 0.30).abs() < 1e-9 && (hit.at.1 - 0.18).abs() < 1e-9, "{:?}", hit.at);
+        assert!(echoes.in_way(robot, to, half, -0.08).is_none(), "strafing the other way");
+        // no track within 1 cm of the line clears it: the robot is 8 cm from the line
+        assert_eq!(echoes.sidestep(robot, -0.08, to, half), None);
+        // from the line itself, the point 10 cm left lies in the corridor; 5 cm further out it
+        // does not, and the track on the line is taken
+        let mut far = Echoes::new(Safety::new(&cfg));
+        far.add_fixed(vec![(0.30, 0.23)]);
+        assert_eq!(far.sidestep(robot, -0.08, to, half), Some(0.0));
     }
 }

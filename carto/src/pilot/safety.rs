@@ -3,17 +3,20 @@
 //! [`crate::surroundings`].
 //!
 //! - **Scan.** After the straight reading of a FORWARD is clear, the robot looks
-//!   [`CartoConfig::scan_deg`] to the left, then to the right, taking one reading at rest each, and
+//!   [`CartoConfig::scan_deg`](crate::CartoConfig::scan_deg) to the left, then to the right, taking one reading at rest each, and
 //!   turns back to the grid heading. A reading that does not come within
-//!   [`CartoConfig::distance_wait`] leaves the scan incomplete and the FORWARD is not driven
+//!   [`CartoConfig::distance_wait`](crate::CartoConfig::distance_wait) leaves the scan incomplete and the FORWARD is not driven
 //!   (never drive blind); the robot still turns back first.
 //! - **Corridor.** The FORWARD runs only if no echo point lies in the rectangle the body sweeps:
-//!   as wide as the body plus [`CartoConfig::clearance_m`] either side, from the front face to the
+//!   as wide as the body plus [`CartoConfig::clearance_m`](crate::CartoConfig::clearance_m) either side, from the front face to the
 //!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
-//!   threshold does). When an echo point lies in it, the FORWARD may run on a track beside the
-//!   line through the centres, up to [`CartoConfig::stop_within_m`] less
-//!   [`CartoConfig::lateral_tolerance_m`] from it (the move ends within that tolerance of its
-//!   track), in steps of [`ASIDE_STEP_M`], nearest first: the corridor along that track must hold
+//!   threshold does). A body off the line through the centres (a turn made off the centre, a
+//!   stop within its tolerance) strafes back to its track while it drives: the strip its flank
+//!   sweeps on the way there, from its back face to the corridor's end, must hold no point
+//!   either. When an echo point lies in the way, the FORWARD may run on a track beside the
+//!   line through the centres, up to [`CartoConfig::stop_within_m`](crate::CartoConfig::stop_within_m) less
+//!   [`CartoConfig::lateral_tolerance_m`](crate::CartoConfig::lateral_tolerance_m) from it (the move ends within that tolerance of its
+//!   track), in steps of [`ASIDE_STEP_M`](super::limits::ASIDE_STEP_M), nearest first: the corridor along that track must hold
 //!   no point (the mecanum wheels strafe to it while driving; the body's own footprint is free).
 //!   The reason: a passage that leaves the body less than the clearance at the centre, but
 //!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
@@ -75,17 +78,17 @@
 //!   corrected, and a range to them would measure nothing.
 //! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
 //!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
-//!   target, with an echo no farther than one cell, is kept ([`CartoConfig::turn_readings`]):
+//!   target, with an echo no farther than one cell, is kept ([`CartoConfig::turn_readings`](crate::CartoConfig::turn_readings)):
 //!   near the end of a turn the cone sweeps beside the path of the FORWARD that may follow,
 //!   where the straight reading at rest does not look (a chair leg or a box corner at the side
 //!   of the next cell), and it sees a sofa too close for the reading at rest (an echo under
 //!   the HC-SR04's 2 cm minimum reads "no echo"). They are kept as long as the echoes heard at
 //!   rest are (below, "Kept while they hold"). The heading is
-//!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`],
+//!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`](crate::CartoConfig::sonar_lag),
 //!   half its cycle, before the frame arrived; carried at most
-//!   [`CartoConfig::max_extrapolation`]). The echo could come from anywhere across the cone; it
+//!   [`CartoConfig::max_extrapolation`](crate::CartoConfig::max_extrapolation)). The echo could come from anywhere across the cone; it
 //!   is kept on the cone's edge farther from the next FORWARD's line (the heading's line through
-//!   where the robot was), [`FAR_SIGMAS`] sonar σ beyond its range, so it blocks that FORWARD
+//!   where the robot was), [`FAR_SIGMAS`](super::limits::FAR_SIGMAS) sonar σ beyond its range, so it blocks that FORWARD
 //!   only when the whole arc lies in the body's path. These points feed only the corridor
 //!   check, never the turn check (but for the one that refuses a FORWARD, "Kept while they
 //!   hold"): a turn would shift away from an echo whose position is this uncertain. Readings at
@@ -93,7 +96,7 @@
 //!
 //!   The end of a turn sweeps the cone across one side of the next FORWARD's path only (the
 //!   side the turn comes from). So after a mapping turn and its `MOVE_DONE` the robot turns on
-//!   past the new heading, the way the turn went, by [`CartoConfig::look_past_turn_deg`], and
+//!   past the new heading, the way the turn went, by [`CartoConfig::look_past_turn_deg`](crate::CartoConfig::look_past_turn_deg), and
 //!   back, as a look (the reference heading stays), and keeps the readings of that sweep (all
 //!   of them, within the look's angle plus 5°) by the same rules: the other side. Cute's next
 //!   command waits in the queue meanwhile; the `MOVE_DONE` has gone out, so Cute and Carto agree
@@ -107,11 +110,11 @@
 //!   farther back its cone is wider: 24 cm across at 0.9 m, about the body's width, against
 //!   12 cm at 0.45 m, from the next cell's centre. Every echo heard while a FORWARD drives, no
 //!   farther than the next FORWARD's corridor can reach, is kept
-//!   ([`CartoConfig::drive_readings`]), placed from where the odometry, carried to when the
+//!   ([`CartoConfig::drive_readings`](crate::CartoConfig::drive_readings)), placed from where the odometry, carried to when the
 //!   sonar measured, says the robot was, on the cone's edge farther from the heading's line as
-//!   a reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`] sonar σ (the closest
+//!   a reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`](super::limits::FAR_SIGMAS) sonar σ (the closest
 //!   of the ten readings a second of a wall just past the corridor's end would otherwise fall
-//!   inside it) plus [`CartoConfig::drive_timing_m`], the distance the robot drives in the
+//!   inside it) plus [`CartoConfig::drive_timing_m`](crate::CartoConfig::drive_timing_m), the distance the robot drives in the
 //!   sonar's mean lag (the frame carries a result measured 0–2 mean lags before it; one is
 //!   assumed, so a fresher one was heard from up to that much farther on). The margin also
 //!   covers the along-track shortening of the edge's placement, r·(1 − cos 7.5°): 8 mm at
@@ -138,7 +141,6 @@ use robot_model::time::Instant;
 use super::forward::DriveReading;
 use super::localisation::heading_deg;
 use super::{Io, Pilot, Stage};
-use crate::CartoConfig;
 use crate::estimate::sonar::Reading;
 use crate::surroundings::Pose2;
 
@@ -151,87 +153,9 @@ const RECENTRE_FROM_M: f64 = 0.03;
 /// Readings in turns are kept only while the heading is this close to the turn's target,
 /// degrees: they look beside the path of the FORWARD that may follow.
 pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
-/// A look past a turn keeps its readings within its own angle plus this, degrees (the look may
-/// overshoot a little before it settles).
-const LOOK_WINDOW_SLACK_DEG: f64 = 5.0;
-/// The tracks a FORWARD tries beside the line through the centres are this far apart, metres.
-pub(super) const ASIDE_STEP_M: f64 = 0.0025;
-
 /// How far each way a look aside turns the body, degrees: a range taken there measures the
 /// position mostly across the heading (sin 60° = 0.87 of it).
 pub(super) const LOOK_ASIDE_DEG: f64 = 60.0;
-/// An echo heard while moving is kept this many sonar σ beyond its range.
-pub(super) const FAR_SIGMAS: f64 = 3.0;
-
-/// The geometry the checks need, from [`CartoConfig`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Safety {
-    pub(super) scan_deg: f64,
-    pub(super) cell_m: f64,
-    pub(super) mount_m: f64,
-    pub(super) half_cone_deg: f64,
-    pub(super) max_range_m: f64,
-    pub(super) half_length_m: f64,
-    pub(super) half_width_m: f64,
-    pub(super) clearance_m: f64,
-    /// The swept circle of a turn plus the clearance: no known echo may lie inside it.
-    pub(super) turn_clear_m: f64,
-    pub(super) safe_turns: bool,
-    /// Shifts before a turn may strafe across the heading too.
-    pub(super) strafe_shifts: bool,
-    /// Keep the readings taken while a turn runs.
-    pub(super) turn_readings: bool,
-    /// Keep the readings taken while a FORWARD drives.
-    pub(super) drive_readings: bool,
-    /// How far past a finished turn the robot turns on and back, listening, degrees (0: off).
-    pub(super) look_past_deg: f64,
-    /// How long before its frame arrives a reading was measured.
-    pub(super) sonar_lag_s: f64,
-    /// One reading's noise, metres.
-    pub(super) sonar_sigma_m: f64,
-    /// [`CartoConfig::drive_timing_m`].
-    pub(super) drive_timing_m: f64,
-    /// How far beside the line through the centres a FORWARD's track may lie, metres
-    /// ([`CartoConfig::stop_within_m`] less the lateral tolerance it ends within).
-    pub(super) aside_max_m: f64,
-}
-
-impl Safety {
-    pub(super) fn new(cfg: &CartoConfig) -> Safety {
-        Safety {
-            scan_deg: cfg.scan_deg.abs(),
-            cell_m: cfg.cell_size_m,
-            mount_m: cfg.sonar_mount_m,
-            half_cone_deg: 0.5 * cfg.sonar_cone_deg,
-            max_range_m: cfg.sonar_max_m,
-            half_length_m: 0.5 * cfg.body_length_m,
-            half_width_m: 0.5 * cfg.body_width_m,
-            clearance_m: cfg.clearance_m,
-            turn_clear_m: cfg.turn_radius_m() + cfg.clearance_m,
-            safe_turns: cfg.safe_turns,
-            strafe_shifts: cfg.strafe_shifts,
-            turn_readings: cfg.turn_readings,
-            drive_readings: cfg.drive_readings,
-            look_past_deg: cfg.look_past_turn_deg.abs(),
-            sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
-            sonar_sigma_m: cfg.sonar_sigma_m,
-            drive_timing_m: cfg.drive_timing_m(),
-            aside_max_m: (cfg.stop_within_m - cfg.lateral_tolerance_m).max(0.0),
-        }
-    }
-
-    /// How far from the grid heading a reading taken while looking past a turn may be, degrees.
-    pub(super) fn look_window_deg(&self) -> f64 {
-        self.look_past_deg + LOOK_WINDOW_SLACK_DEG
-    }
-
-    /// The looks of a scan, as offsets from the grid heading (counter-clockwise degrees); a
-    /// reading is taken after each but the last, which faces the grid heading again.
-    pub(super) fn looks(&self) -> &'static [f64] {
-        if self.scan_deg > 0.0 { &[1.0, -1.0, 0.0] } else { &[] }
-    }
-}
-
 impl Pilot {
     /// The looks before this FORWARD (the signs of each, the last back to the grid heading) and
     /// their angle: the scan's, else a look aside when one is due, else none.
@@ -335,7 +259,7 @@ impl Pilot {
     }
 
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
-    /// the turn went, by [`CartoConfig::look_past_turn_deg`], the sonar listening, then back.
+    /// the turn went, by [`CartoConfig::look_past_turn_deg`](crate::CartoConfig::look_past_turn_deg), the sonar listening, then back.
     /// When the look cannot start, the next command follows at once.
     pub(super) fn look_past(&mut self, io: &mut Io<'_>, turn: Move, unacked: Option<Move>) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
@@ -401,7 +325,7 @@ impl Pilot {
     }
 
     /// Faces the grid heading again after looking past a turn; if that cannot start, the body
-    /// may face off the heading, and the next move faces it first ([`Motor::rotation_was_cut`]).
+    /// may face off the heading, and the next move faces it first ([`Motor::rotation_was_cut`](crate::motor::Motor::rotation_was_cut)).
     pub(super) fn look_back(&mut self, io: &mut Io<'_>, since: Instant, unacked: Option<Move>) {
         match io.motor.start_look(io.now, 0.0, io.sensors) {
             Ok(()) => self.stage = Stage::LookingPast { back: true, since, unacked },
@@ -494,7 +418,8 @@ impl Pilot {
             // at the next centre, so a straight echo blocks exactly as the one-cell threshold does
             let to = s.cell_m - off.along_m + s.half_length_m;
             let half = s.half_width_m + s.clearance_m;
-            if let Some(hit) = self.echoes.in_corridor(robot, to, half) {
+            // the move ends on the line through the centres: the body strafes back to it
+            if let Some(hit) = self.echoes.in_way(robot, to, half, -off.left_m) {
                 match self.echoes.sidestep(robot, off.left_m, to, half) {
                     Some(track) => {
                         tracing::info!(

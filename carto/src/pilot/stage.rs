@@ -19,7 +19,7 @@ pub(super) enum Stage {
     /// Driving back after a bumper hit or a stalled FORWARD.
     BackingOff,
     /// The sonar scan before a FORWARD: look number `look` of
-    /// [`Safety::looks`](super::safety::Safety::looks) runs.
+    /// [`Safety::looks`](super::limits::Safety::looks) runs.
     Looking { look: usize },
     /// Waiting for a distance reading at rest after look number `look`.
     Reading { look: usize, since: Instant },
