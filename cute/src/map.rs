@@ -418,9 +418,9 @@ impl Map {
             return Refusal::Nothing;
         }
         if value.is_known_free()
-            && let Ok(new) = self.block_move(from, ahead)
+            && let blocked @ Refusal::MoveBlocked { .. } = self.note_way_not_clear(from, ahead)
         {
-            return Refusal::MoveBlocked { new };
+            return blocked;
         }
         match self.set_obstacle(usize::from(ahead.0), usize::from(ahead.1)) {
             Ok(()) => Refusal::Obstacle,

@@ -121,19 +121,33 @@ impl Echoes {
     /// to its track (the motor holds the track while driving), the strip its flank sweeps getting
     /// there, from its back face on (`pilot/safety.rs`, "Corridor").
     pub(super) fn in_way(&self, robot: Pose2, to_m: f64, half_m: f64, track_m: f64) -> Option<Hit> {
-        let s = self.safety;
-        let strafe = if track_m > 0.0 { (half_m, track_m + half_m) } else { (track_m - half_m, -half_m) };
         let first = |points: &Surroundings| {
-            points.first_in_corridor(robot, s.mount_m, to_m, half_m).or_else(|| {
-                (track_m != 0.0)
-                    .then(|| points.first_in_strip(robot, (-s.half_length_m, to_m), strafe))
-                    .flatten()
-            })
+            points
+                .first_in_corridor(robot, self.safety.mount_m, to_m, half_m)
+                .or_else(|| self.in_strafe_strip(points, robot, to_m, half_m, track_m))
         };
         if let Some(at) = first(&self.at_rest) {
             return Some(Hit { at, heard_moving: false });
         }
         Some(Hit { at: first(&self.moving)?, heard_moving: true })
+    }
+
+    /// The nearest of `points` in the strip beside `robot` that its flank sweeps strafing
+    /// `track_m` to the left (to the right when negative) to its track, from its back face to
+    /// `to_m` ahead, beyond the `half_m` either side its corridor covers; `None` without a strafe.
+    fn in_strafe_strip(
+        &self,
+        points: &Surroundings,
+        robot: Pose2,
+        to_m: f64,
+        half_m: f64,
+        track_m: f64,
+    ) -> Option<(f64, f64)> {
+        if track_m == 0.0 {
+            return None;
+        }
+        let beside = if track_m > 0.0 { (half_m, track_m + half_m) } else { (track_m - half_m, -half_m) };
+        points.first_in_strip(robot, (-self.safety.half_length_m, to_m), beside)
     }
 
     /// Keeps the echo heard moving at `at` (ahead, left of `robot`) from now on as if heard at
@@ -156,12 +170,9 @@ impl Echoes {
             // the track is checked from the body's back face, beside it too
             let (x, y) = robot.offset(0.0, track - left_m);
             let on_track = Pose2 { x, y, ..robot };
-            let strafe = (track - left_m).abs();
-            let beside = if track > left_m { (half_m, strafe + half_m) } else { (-strafe - half_m, -half_m) };
             [&self.at_rest, &self.moving].iter().all(|points| {
                 points.first_in_corridor(on_track, -s.half_length_m, to_m, half_m).is_none()
-                    && (strafe == 0.0
-                        || points.first_in_strip(robot, (-s.half_length_m, to_m), beside).is_none())
+                    && self.in_strafe_strip(points, robot, to_m, half_m, track - left_m).is_none()
             })
         })
     }
