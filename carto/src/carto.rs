@@ -198,13 +198,13 @@ impl Carto {
             pilot: Pilot::new(&cfg),
             motor: Motor::new(cfg.clone()),
             sensors: SensorState::default(),
-            ultrasound: Ultrasound::new(cfg.obstacle_threshold_cm, cfg.distance_max_age),
-            keep: crate::sensors::KeepState::new(cfg.keep_state_period, cfg.peer_lost_after),
-            link_decoder: protocol::link::Decoder::new(cfg.max_frame),
-            motor_decoder: protocol::motor::Decoder::new(cfg.motor_checksum),
+            ultrasound: Ultrasound::new(cfg.safety.obstacle_threshold_cm, cfg.safety.distance_max_age),
+            keep: crate::sensors::KeepState::new(cfg.boards.keep_state_period, cfg.boards.peer_lost_after),
+            link_decoder: protocol::link::Decoder::new(cfg.client.max_frame),
+            motor_decoder: protocol::motor::Decoder::new(cfg.boards.motor_checksum),
             sensor_decoder: protocol::sensor::Decoder::new(),
-            motor_line: LineTimer::new(cfg.motor_baud),
-            sensor_line: LineTimer::new(cfg.sensor_baud),
+            motor_line: LineTimer::new(cfg.boards.motor_baud),
+            sensor_line: LineTimer::new(cfg.boards.sensor_baud),
             peer: None,
             close_client: false,
             client_out: Vec::new(),
@@ -402,7 +402,7 @@ impl Carto {
         if event == Some(PeerEvent::Lost) {
             self.stats.peer_lost_events += 1;
             tracing::error!(
-                after_ms = self.cfg.peer_lost_after.total_millis(),
+                after_ms = self.cfg.boards.peer_lost_after.total_millis(),
                 "sensor board lost: no keep-state; motors stopped"
             );
             self.pilot.on_fault(now, &mut self.motor, "sensor board lost");
@@ -411,7 +411,7 @@ impl Carto {
             if let Some(d) = drive.poll(now)
                 && self.motor_link_up
             {
-                self.motor_out.extend(wire::encode_drive(d, self.cfg.speed_ratio));
+                self.motor_out.extend(wire::encode_drive(d, self.cfg.boards.speed_ratio));
                 self.stats.drive_frames_out += 1;
             }
             log_suppressed(self.limiter.drain(now));
@@ -478,7 +478,7 @@ impl Carto {
         {
             return now;
         }
-        let mut next = now + self.cfg.idle_resend_period;
+        let mut next = now + self.cfg.boards.idle_resend_period;
         let candidates = [
             self.keep.next_deadline(),
             self.keep.lost_deadline(),
@@ -518,7 +518,7 @@ impl Carto {
     fn flush_motor(&mut self) {
         for drive in self.motor.take_drives() {
             if self.motor_link_up {
-                self.motor_out.extend(wire::encode_drive(drive, self.cfg.speed_ratio));
+                self.motor_out.extend(wire::encode_drive(drive, self.cfg.boards.speed_ratio));
                 self.stats.drive_frames_out += 1;
             }
         }

@@ -248,7 +248,8 @@ impl Harness {
         let (listener, connector) = mem_listener(None, clock.clone());
         let (m_carto, motor) = MemLink::pair(None, clock.clone());
         let (s_carto, sensor) = MemLink::pair(None, clock.clone());
-        let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(5)), ..CartoConfig::default() };
+        let mut cfg = CartoConfig::default();
+        cfg.client.idle_limit = Some(Duration::from_secs(5));
         Harness {
             rt: CartoRuntime::new(Carto::new(cfg.clone()), listener, m_carto, s_carto),
             clock,
@@ -257,7 +258,7 @@ impl Harness {
             motor,
             sensor,
             now: Instant::ZERO,
-            mirror: LinkDecoder::new(cfg.max_frame),
+            mirror: LinkDecoder::new(cfg.client.max_frame),
             mirror_dead: false,
             must_stop: Some("start"),
             drives: MotorDecoder::new(ChecksumPolicy::Sum),
@@ -312,7 +313,7 @@ impl Harness {
         }
         if let Ok(c) = self.connector.connect() {
             self.client = Some(c);
-            self.mirror = LinkDecoder::new(self.rt.carto().config().max_frame);
+            self.mirror = LinkDecoder::new(self.rt.carto().config().client.max_frame);
             self.mirror_dead = false;
         }
     }

@@ -6,29 +6,29 @@
 //! distance, never below the minimum that still moves the robot, with a proportional heading hold
 //! on `omega` so it drives straight; for a turn, `omega` proportional to the remaining angle with a
 //! minimum. It stops early by the distance the robot coasts after a zero command (motor lag,
-//! [`CartoConfig::stop_lead_s`]). **Settling**: the command is zero and the controller waits for
+//! [`Motion::stop_lead_s`](crate::config::Motion::stop_lead_s)). **Settling**: the command is zero and the controller waits for
 //! readings taken at rest; within tolerance (±1 cm, ±2°) the move is done, otherwise it nudges
-//! again at low speed, at most [`CartoConfig::max_corrections`] times. A turn still within 2.5
+//! again at low speed, at most [`Motion::max_corrections`](crate::config::Motion::max_corrections) times. A turn still within 2.5
 //! tolerances (5°) after the last nudge counts as done: on a slow motor link every nudge can
 //! overshoot, and failing such a turn left Carto's heading behind Cute's.
 //!
 //! The cartography FORWARD ([`Motor::start_next_cell`]) is *absolute*: it drives `cell − along` to
 //! the next cell's centre, where `along` comes from the [`Odometry`] this controller keeps (the
 //! offset from the current cell's centre), strafes (`vy`) the lateral offset back to zero while
-//! driving, and, if it still ends more than [`CartoConfig::lateral_tolerance_m`] off its track,
+//! driving, and, if it still ends more than [`Motion::lateral_tolerance_m`](crate::config::Motion::lateral_tolerance_m) off its track,
 //! strafes back as a settle correction (a **Strafe** phase). The stop point also learns the robot's
 //! systematic overshoot ([`Motor::coast_bias_m`]).
 //!
 //! A turn never starts while the robot may still be coasting: when the wheels were commanded to
-//! zero less than [`CartoConfig::settle_time`] ago (a STOP in the middle of a FORWARD, then at once
+//! zero less than [`Motion::settle_time`](crate::config::Motion::settle_time) ago (a STOP in the middle of a FORWARD, then at once
 //! a RIGHT), the turn first waits (a **Rest** phase, zero command) for encoder readings taken after
 //! that time; if the encoder readings have gone stale
-//! ([`CartoConfig::sensor_stale_after`]), it turns once that time has passed. The odometry ignores
+//! ([`Boards::sensor_stale_after`](crate::config::Boards::sensor_stale_after)), it turns once that time has passed. The odometry ignores
 //! translation while turning, so coasting during a turn would be lost and the next FORWARD would
 //! correct its track for the wrong offset.
 //!
 //! A turn whose remaining angle has not shrunk by [`JAM_PROGRESS_DEG`] for
-//! [`CartoConfig::jam_after`] is jammed against something and fails at once
+//! [`Motion::jam_after`](crate::config::Motion::jam_after) is jammed against something and fails at once
 //! ([`MoveError::Jammed`]); [`Motor::start_turn_back`] then turns the body back to the reference
 //! the turn started from.
 //!
@@ -38,11 +38,11 @@
 //!
 //! Invariants:
 //! - the command the board should apply is always [`Motor::command`]; it is (re)sent when it
-//!   changes and otherwise every [`CartoConfig::drive_resend_period`] while moving and every
-//!   [`CartoConfig::idle_resend_period`] when idle (the zero command), so the board's 500 ms
+//!   changes and otherwise every [`Boards::drive_resend_period`](crate::config::Boards::drive_resend_period) while moving and every
+//!   [`Boards::idle_resend_period`](crate::config::Boards::idle_resend_period) when idle (the zero command), so the board's 500 ms
 //!   watchdog never trips during a move;
 //! - [`Motor::stop`] sets the zero command and queues it at once;
-//! - every move ends, with success or a [`MoveError`], by [`CartoConfig::move_timeout`] at the latest.
+//! - every move ends, with success or a [`MoveError`], by [`Motion::move_timeout`](crate::config::Motion::move_timeout) at the latest.
 //!
 //! ```
 //! use carto::motor::{Drive, Motor};
@@ -116,7 +116,7 @@ struct Move {
     progress: Option<(Instant, f64)>,
 }
 
-/// A turn must come this much closer to its target every [`CartoConfig::jam_after`], degrees.
+/// A turn must come this much closer to its target every [`Motion::jam_after`](crate::config::Motion::jam_after), degrees.
 pub const JAM_PROGRESS_DEG: f64 = 1.0;
 
 /// How long after a turn the IMU drift estimate still waits (the body settles), see
@@ -259,7 +259,7 @@ impl Motor {
 
     /// [`Motor::start_next_cell`] on a track `track_left_m` left of the line through the cells'
     /// centres: the lateral hold strafes to it while driving, and the move ends on it (within
-    /// [`CartoConfig::lateral_tolerance_m`]).
+    /// [`Motion::lateral_tolerance_m`](crate::config::Motion::lateral_tolerance_m)).
     pub fn start_next_cell_on(
         &mut self,
         now: Instant,
@@ -492,8 +492,11 @@ impl Motor {
                 }
             }
         }
-        let period =
-            if self.current.is_some() { self.cfg.drive_resend_period } else { self.cfg.idle_resend_period };
+        let period = if self.current.is_some() {
+            self.cfg.boards.drive_resend_period
+        } else {
+            self.cfg.boards.idle_resend_period
+        };
         let due = self.last_sent.is_none_or(|(_, at)| now.saturating_since(at) >= period);
         if due {
             self.set_command(now, self.command, true);
@@ -502,8 +505,11 @@ impl Motor {
 
     /// The next time `poll` must run for the resend cadence (the control loop wants every poll).
     pub fn next_deadline(&self) -> Option<Instant> {
-        let period =
-            if self.current.is_some() { self.cfg.drive_resend_period } else { self.cfg.idle_resend_period };
+        let period = if self.current.is_some() {
+            self.cfg.boards.drive_resend_period
+        } else {
+            self.cfg.boards.idle_resend_period
+        };
         self.last_sent.map(|(_, at)| at + period)
     }
 
@@ -526,7 +532,8 @@ impl Motor {
     fn begin_move(&mut self, now: Instant, mut m: Move, s: &SensorState) {
         self.outcome = None;
         let goal = m.goal;
-        let coasting_until = self.zeroed_at.map(|at| at + self.cfg.settle_time).filter(|until| now < *until);
+        let coasting_until =
+            self.zeroed_at.map(|at| at + self.cfg.motion.settle_time).filter(|until| now < *until);
         m.phase = match (goal, coasting_until) {
             (Goal::Yaw { .. }, Some(until)) => {
                 tracing::debug!(wait_ms = until.saturating_since(now).total_millis(), "turn waits for rest");

@@ -144,7 +144,7 @@ impl Odometry {
     pub fn body_delta(delta_counts: [f64; 4], cfg: &CartoConfig) -> (f64, f64) {
         let [fl, fr, rl, rr] = delta_counts.map(|d| d / cfg.encoder_counts_per_metre());
         let forward = (fl + fr + rl + rr) / 4.0;
-        let left = (-fl + fr + rl - rr) / (4.0 * cfg.roller_tan);
+        let left = (-fl + fr + rl - rr) / (4.0 * cfg.chassis.roller_tan);
         (forward, left)
     }
 

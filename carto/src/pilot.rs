@@ -22,7 +22,7 @@
 //!   is skipped; both are logged.
 //! - `STOP_ROBOT` stops the motors now and drops every pending command and partial batch; no reply.
 //! - Tasks queue in arrival order; a new request never interrupts a running task (only STOP does).
-//! - A turn that fails — jammed (the IMU shows no progress for [`CartoConfig::jam_after`]), timed
+//! - A turn that fails — jammed (the IMU shows no progress for [`Motion::jam_after`](crate::config::Motion::jam_after)), timed
 //!   out, not converged, a reading gone stale — is turned back to the grid heading it started
 //!   from before `MOVE_DONE`, so the body faces the heading Carto still stores (Cute learns from
 //!   the next FORWARD's reply that the turn was not made). A reconnect whose re-sent pose takes
@@ -31,12 +31,12 @@
 //!   rest is aborted, and (by default) the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
 //! - A FORWARD whose sonar range holds while the wheels drive is stalled (`pilot/stall.rs`,
-//!   [`CartoConfig::stall_watch`]): it is stopped, the odometry takes the sonar's word, and it
+//!   [`Safety::stall_watch`](crate::config::Safety::stall_watch)): it is stopped, the odometry takes the sonar's word, and it
 //!   ends as after the bumper (`SET_OBSTACLE_POSITION(cell ahead)`, back-off, `MOVE_DONE`).
 //! - **Pushed.** A FORWARD during which the gap between the IMU's and the wheels' headings jumps
 //!   by more than [`crate::sensors::PUSH_JUMP_DEG`] has met something beside the bumper: a corner
 //!   or a leg turned the body under its wheels, and mecanum rollers give way sideways
-//!   ([`CartoConfig::push_watch`]). It ends as after the bumper. The first sample of the drift
+//!   ([`ImuDrift::push_watch`](crate::config::ImuDrift::push_watch)). It ends as after the bumper. The first sample of the drift
 //!   estimate after the FORWARD starts does not count: the estimate takes no samples in a turn
 //!   and the 0.5 s after it, and a FORWARD often starts within them, so that sample still holds
 //!   what the turn before did. What the watch misses is listed at
@@ -62,7 +62,7 @@
 //! use robot_model::time::Instant;
 //! let cfg = CartoConfig::default();
 //! let (mut pilot, mut motor) = (Pilot::new(&cfg), Motor::new(cfg.clone()));
-//! let (sensors, us) = (SensorState::default(), Ultrasound::new(30.0, cfg.distance_max_age));
+//! let (sensors, us) = (SensorState::default(), Ultrasound::new(30.0, cfg.safety.distance_max_age));
 //! let now = Instant::ZERO;
 //! pilot.handle(now, Request::SetPose { x: 2, y: 3, direction: Ok(Heading::East) }, &mut motor);
 //! // a cartography move without the sensor board cannot run: MOVE_DONE only
@@ -109,8 +109,7 @@ use stage::Stage;
 pub struct Pilot {
     distance_wait: Duration,
     stale_after: Duration,
-    back_off: bool,
-    /// The geometry and switches of the safety checks.
+    /// The geometry and limits of the safety checks.
     safety: Safety,
     /// The running task, the queued ones and the partial batch.
     tasks: Tasks,
@@ -141,9 +140,8 @@ impl Pilot {
     pub fn new(cfg: &CartoConfig) -> Self {
         let safety = Safety::new(cfg);
         Pilot {
-            distance_wait: cfg.distance_wait,
-            stale_after: cfg.sensor_stale_after,
-            back_off: cfg.back_off_after_bump,
+            distance_wait: cfg.safety.distance_wait,
+            stale_after: cfg.boards.sensor_stale_after,
             safety,
             tasks: Tasks::default(),
             place: Localisation::new(cfg),
@@ -572,17 +570,15 @@ impl Pilot {
         self.end_stopped_forward(io);
     }
 
-    /// After a FORWARD stopped short: drive back to the cell it started from (by default), then
-    /// `MOVE_DONE`.
+    /// After a FORWARD stopped short: drive back to the cell it started from, then `MOVE_DONE`
+    /// (at once when the motor cannot start the way back).
     fn back_off_or_end(&mut self, io: &mut Io<'_>) {
-        if self.back_off {
-            match io.motor.start_return(io.now, io.sensors) {
-                Ok(()) => {
-                    self.stage = Stage::BackingOff;
-                    return;
-                }
-                Err(e) => tracing::warn!(error = %e, "cannot back off"),
+        match io.motor.start_return(io.now, io.sensors) {
+            Ok(()) => {
+                self.stage = Stage::BackingOff;
+                return;
             }
+            Err(e) => tracing::warn!(error = %e, "cannot back off"),
         }
         self.end_task(io.now);
     }

@@ -10,7 +10,7 @@
 //! 3. polls Carto;
 //! 4. writes Carto's output, keeping what a link did not take for the next step;
 //! 5. closes the client after a fatal framing error, or after
-//!    [`crate::CartoConfig::client_idle_limit`] without a complete frame from it (bytes that
+//!    [`Client::idle_limit`](crate::config::Client::idle_limit) without a complete frame from it (bytes that
 //!    trickle in without completing a frame do not keep the session open).
 //!
 //! A client's close is therefore always read before the next connection is looked at, so a
@@ -222,7 +222,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
             return now;
         }
         let mut next = self.carto.next_deadline(now);
-        if let (Some(limit), Some(c)) = (self.carto.config().client_idle_limit, self.client.as_ref()) {
+        if let (Some(limit), Some(c)) = (self.carto.config().client.idle_limit, self.client.as_ref()) {
             next = next.min(c.last_frame + limit);
         }
         next.max(now)
@@ -253,7 +253,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         let mut report = StepReport::default();
         self.accept(now, &mut report);
         self.read_client(now, &mut report);
-        if let (Some(limit), Some(c)) = (self.carto.config().client_idle_limit, self.client.as_ref())
+        if let (Some(limit), Some(c)) = (self.carto.config().client.idle_limit, self.client.as_ref())
             && now.saturating_since(c.last_frame) >= limit
         {
             let why = format!("idle limit: no complete frame for {:.1} s", limit.as_secs_f64());
@@ -290,7 +290,7 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
         let Some(link) = self.motor.as_mut() else {
             return false;
         };
-        self.motor_out = crate::wire::encode_drive(Drive::STOP, self.carto.config().speed_ratio);
+        self.motor_out = crate::wire::encode_drive(Drive::STOP, self.carto.config().boards.speed_ratio);
         match write_some(link, &mut self.motor_out) {
             Ok(n) => self.stats.motor_bytes_out += n as u64,
             Err(_) => self.stats.board_io_errors += 1,

@@ -5,7 +5,7 @@
 //! Concept: readings arrive at a few hertz (encoders 5 Hz, NavX 10 Hz) while the controller runs
 //! every millisecond, so [`SensorState`] also *extrapolates*: a wheel's count now = last count +
 //! its rate × the time since (rate from fresh motor telemetry, else from its last two counts),
-//! capped at [`CartoConfig::max_extrapolation`]. The same for the heading.
+//! capped at [`Boards::max_extrapolation`](crate::config::Boards::max_extrapolation). The same for the heading.
 //!
 //! Invariants:
 //! - the heading is kept as an *unwrapped* counter-clockwise yaw in degrees (the NavX reports
@@ -54,7 +54,7 @@ pub const SLIP_HOLD: Duration = Duration::from_millis(2000);
 
 /// A jump of the gap between the IMU's and the wheels' headings larger than this, beyond the
 /// drift estimate, is a push: something the body touches turned it under its wheels, degrees.
-/// A FORWARD that sees one stops ([`CartoConfig::push_watch`], `pilot.rs`, "Pushed").
+/// A FORWARD that sees one stops ([`ImuDrift::push_watch`](crate::config::ImuDrift::push_watch), `pilot.rs`, "Pushed").
 ///
 /// A jump is what [`SensorState::estimate_imu_drift`] calls one: one of its samples (the IMU
 /// reports at 10 Hz; no sample is taken in a turn, nor while either heading turns faster than
@@ -231,19 +231,19 @@ impl SensorState {
     ///
     /// A complementary filter: the change of the wheels' heading since the last sample predicts
     /// the yaw, and the IMU pulls the prediction with time constant
-    /// [`CartoConfig::imu_smoothing_tau_s`] (0 = off). The wheels' heading is smooth but slips;
+    /// [`ImuSmoothing::tau_s`](crate::config::ImuSmoothing::tau_s) (no smoothing: `None`). The wheels' heading is smooth but slips;
     /// the IMU's does not slip but carries white noise (the profile's 0.2°). Without smoothing
     /// that noise drives the heading hold, and in the twin the wheels' heading then wandered by
     /// up to 1.2° over a 37-minute mission (0.25° with a noiseless IMU); the drift estimate,
     /// which follows the wheels, took it for drift. The filter restarts from the raw IMU while
     /// `turning` (a turn or a look runs, or ended less than [`crate::motor::SETTLE_AFTER_TURN`]
     /// ago: the wheels slip most then) and when the IMU disagrees with the prediction by
-    /// more than [`CartoConfig::imu_smoothing_reset_deg`] (a slip, a collision).
+    /// more than [`ImuSmoothing::reset_deg`](crate::config::ImuSmoothing::reset_deg) (a slip, a collision).
     pub fn smooth_yaw(&mut self, cfg: &CartoConfig, turning: bool) {
-        if cfg.imu_smoothing_tau_s <= 0.0 {
+        let Some(smoothing) = cfg.imu.smoothing.as_ref().filter(|s| s.tau_s > 0.0) else {
             self.smooth = None;
             return;
-        }
+        };
         if let (Some(last), Some(y)) = (self.smooth, self.yaw)
             && last.at == y.at
         {
@@ -258,10 +258,10 @@ impl SensorState {
             Some(last) if !turning && y.at > last.at => {
                 let predicted = last.value + (wheel_deg - last.wheel_deg);
                 let innovation = y.value - predicted;
-                if innovation.abs() > cfg.imu_smoothing_reset_deg {
+                if innovation.abs() > smoothing.reset_deg {
                     Some(restart)
                 } else {
-                    let k = ((y.at - last.at).as_secs_f64() / cfg.imu_smoothing_tau_s).min(1.0);
+                    let k = ((y.at - last.at).as_secs_f64() / smoothing.tau_s).min(1.0);
                     Some(SmoothYaw { value: predicted + k * innovation, at: y.at, wheel_deg })
                 }
             }
@@ -294,11 +294,11 @@ impl SensorState {
     }
 
     /// Every wheel's count moved to time `at` (before or after its sample) at its rate as of
-    /// `now`, at most [`CartoConfig::max_extrapolation`] either way; `None` until all four
+    /// `now`, at most [`Boards::max_extrapolation`](crate::config::Boards::max_extrapolation) either way; `None` until all four
     /// reported.
     fn counts_at(&self, at: Instant, now: Instant, cfg: &CartoConfig) -> Option<[f64; 4]> {
         let mut out = [0.0; 4];
-        let max = cfg.max_extrapolation.as_secs_f64();
+        let max = cfg.boards.max_extrapolation.as_secs_f64();
         for (i, e) in self.encoders.iter().enumerate() {
             let e = (*e)?;
             let dt = if at >= e.at { (at - e.at).as_secs_f64() } else { -(e.at - at).as_secs_f64() };
@@ -312,8 +312,8 @@ impl SensorState {
     /// The difference between the IMU heading and the wheels' heading is constant while neither
     /// drifts nor slips; its slow change is taken to be IMU drift (a NavX drifts about 0.5°/min).
     /// It is sampled only while the robot is not turning (both rates under 3°/s), low-pass filtered
-    /// with [`CartoConfig::imu_drift_tau_s`], and the estimate moves at most
-    /// [`CartoConfig::imu_drift_max_deg_per_min`], so wheel slip (a collision, a turn) can only
+    /// with [`ImuDrift::tau_s`](crate::config::ImuDrift::tau_s), and the estimate moves at most
+    /// [`ImuDrift::max_deg_per_min`](crate::config::ImuDrift::max_deg_per_min), so wheel slip (a collision, a turn) can only
     /// pull it slowly. A gap more than [`DRIFT_JUMP_DEG`] beyond the estimate is slip, not drift: a
     /// collision turned the body under slipping wheels, or the counters were reset. It re-anchors
     /// the estimate, and so does every sample for [`SLIP_HOLD`] after it (the push may go on); then
@@ -326,7 +326,8 @@ impl SensorState {
     /// where the IMU's noise decides which samples pass and the estimate was pulled off by a few
     /// tenths of a degree.
     pub fn estimate_imu_drift(&mut self, now: Instant, cfg: &CartoConfig, turning: bool) {
-        if cfg.imu_drift_tau_s <= 0.0 || turning {
+        let Some(drift) = cfg.imu.drift.as_ref().filter(|d| d.tau_s > 0.0) else { return };
+        if turning {
             return;
         }
         // The wheels' heading at the IMU sample's time: the four encoders report at different
@@ -385,8 +386,8 @@ impl SensorState {
             }
             return;
         }
-        let max_step = cfg.imu_drift_max_deg_per_min / 60.0 * dt;
-        let step = ((seen - self.drift.drift_deg) * dt / cfg.imu_drift_tau_s).clamp(-max_step, max_step);
+        let max_step = drift.max_deg_per_min / 60.0 * dt;
+        let step = ((seen - self.drift.drift_deg) * dt / drift.tau_s).clamp(-max_step, max_step);
         self.drift.drift_deg += step;
     }
 
@@ -423,9 +424,9 @@ impl SensorState {
     /// (two bytes changed in one frame: about one frame in 5,000 at `lossy-motor`'s 1 % byte
     /// errors), and extrapolating with it would throw the odometry metres away.
     fn fresh_rpm(&self, now: Instant, cfg: &CartoConfig) -> Option<[f32; 4]> {
-        let possible = 2.0 * cfg.max_wheel_rpm;
+        let possible = 2.0 * cfg.chassis.max_wheel_rpm;
         self.rpm
-            .filter(|r| now.saturating_since(r.at) <= cfg.telemetry_fresh)
+            .filter(|r| now.saturating_since(r.at) <= cfg.boards.telemetry_fresh)
             .filter(|r| r.value.iter().all(|v| f64::from(v.abs()) <= possible))
             .map(|r| r.value)
     }
@@ -434,7 +435,7 @@ impl SensorState {
     /// encoder samples, else zero.
     pub fn wheel_rate_cps(&self, wheel: usize, now: Instant, cfg: &CartoConfig) -> f64 {
         if let Some(rpm) = self.fresh_rpm(now, cfg) {
-            return f64::from(rpm[wheel.min(3)]) * cfg.encoder_counts_per_wheel_rev / 60.0;
+            return f64::from(rpm[wheel.min(3)]) * cfg.chassis.encoder_counts_per_wheel_rev / 60.0;
         }
         match (self.prev_encoders.get(wheel).copied().flatten(), self.encoders.get(wheel).copied().flatten())
         {
@@ -461,7 +462,8 @@ impl SensorState {
     pub fn yaw_rate_dps(&self, now: Instant, cfg: &CartoConfig) -> f64 {
         if let Some(rpm) = self.fresh_rpm(now, cfg) {
             let [fl, fr, rl, rr] = rpm.map(f64::from);
-            let rim = (-fl + fr - rl + rr) / 4.0 / 60.0 * 2.0 * core::f64::consts::PI * cfg.wheel_radius_m;
+            let rim =
+                (-fl + fr - rl + rr) / 4.0 / 60.0 * 2.0 * core::f64::consts::PI * cfg.chassis.wheel_radius_m;
             return (rim / cfg.rotation_lever_m()).to_degrees();
         }
         match (self.prev_yaw, self.yaw) {
@@ -475,7 +477,7 @@ impl SensorState {
     /// The yaw extrapolated to `now`, degrees counter-clockwise (unwrapped).
     pub fn predicted_yaw(&self, now: Instant, cfg: &CartoConfig) -> Option<f64> {
         let y = self.yaw_deg()?;
-        let dt = now.saturating_since(y.at).min(cfg.max_extrapolation).as_secs_f64();
+        let dt = now.saturating_since(y.at).min(cfg.boards.max_extrapolation).as_secs_f64();
         Some(y.value + self.yaw_rate_dps(now, cfg) * dt)
     }
 

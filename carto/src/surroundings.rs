@@ -249,17 +249,9 @@ impl Surroundings {
     /// The smallest shift `(along, left)` of `robot`, metres, after which no point lies closer
     /// than `radius_m` to its centre, on a grid of `step_m` up to `max_m` each way; no part is a
     /// single step (a move ends within its tolerance and might not drive it). Shifts along the
-    /// heading come first (the robot came from behind and ranged ahead); with `across`, shifts
-    /// with a sideways part follow, shortest first (the mecanum wheels strafe). `None` when none
-    /// clears.
-    pub fn clearing_shift(
-        &self,
-        robot: Pose2,
-        radius_m: f64,
-        max_m: f64,
-        step_m: f64,
-        across: bool,
-    ) -> Option<(f64, f64)> {
+    /// heading come first (the robot came from behind and ranged ahead), then shifts with a
+    /// sideways part, shortest first (the mecanum wheels strafe). `None` when none clears.
+    pub fn clearing_shift(&self, robot: Pose2, radius_m: f64, max_m: f64, step_m: f64) -> Option<(f64, f64)> {
         let reach = radius_m + 2.0 * max_m;
         let near: Vec<(f64, f64)> =
             self.all().copied().filter(|&(x, y)| (x - robot.x).hypot(y - robot.y) < reach).collect();
@@ -271,9 +263,6 @@ impl Surroundings {
         let along = (2..=steps).flat_map(|k| [-k, k]).map(|k| (f64::from(k) * step_m, 0.0));
         if let Some(shift) = along.into_iter().find(|&d| clears(d)) {
             return Some(shift);
-        }
-        if !across {
-            return None;
         }
         // no part of one step: a move ends within its tolerance (1 cm) and might not drive it
         let mut sideways: Vec<(i32, i32)> = (-steps..=steps)
@@ -330,7 +319,7 @@ mod tests {
         // a turn 18 cm beside it shifts until the circle clears it
         let beside = Pose2 { x: 0.30, y: -0.08, yaw_deg: 0.0 };
         assert!(s.inside_circle(beside, 0.197).is_some());
-        let (along, left) = s.clearing_shift(beside, 0.197, 0.11, 0.01, true).expect("a shift clears it");
+        let (along, left) = s.clearing_shift(beside, 0.197, 0.11, 0.01).expect("a shift clears it");
         let shifted = Pose2 { x: 0.30 + along, y: -0.08 + left, yaw_deg: 0.0 };
         assert!(s.inside_circle(shifted, 0.197).is_none());
     }
@@ -343,21 +332,18 @@ mod tests {
         let mut s = Surroundings::default();
         s.add_echo(robot, MOUNT, 0.16 - MOUNT);
         s.add_echo(Pose2 { yaw_deg: 90.0, ..robot }, MOUNT, 0.16 - MOUNT);
-        assert_eq!(
-            s.clearing_shift(robot, 0.197, 0.11, 0.01, false),
-            None,
-            "backing off leaves the left wall"
-        );
-        let (along, left) = s.clearing_shift(robot, 0.197, 0.11, 0.01, true).expect("a diagonal shift");
+        // shifts along the heading come first, so a shift with a sideways part says that backing
+        // off alone leaves the left wall in the circle
+        let (along, left) = s.clearing_shift(robot, 0.197, 0.11, 0.01).expect("a diagonal shift");
         assert!(along <= -0.037 && left <= -0.037, "({along}, {left})");
         assert!(along.hypot(left) < 0.06, "not the shortest: ({along}, {left})");
         // one wall only: backing off along the heading is enough, and comes first
         let mut one = Surroundings::default();
         one.add_echo(robot, MOUNT, 0.16 - MOUNT);
-        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01, true), Some((-0.04, 0.0)));
+        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01), Some((-0.04, 0.0)));
         // walls ahead and behind: nothing within 11 cm clears both
         one.add_echo(Pose2 { yaw_deg: 180.0, ..robot }, MOUNT, 0.16 - MOUNT);
-        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01, true), None);
+        assert_eq!(one.clearing_shift(robot, 0.197, 0.11, 0.01), None);
     }
 
     #[test]

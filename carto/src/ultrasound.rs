@@ -6,7 +6,7 @@
 //! older one was measured from another place or facing another way (after a turn or a move), so it
 //! says nothing about the cell ahead now. Nor does a reading older than the maximum age (default
 //! 300 ms, three sensor periods), even with the robot at rest: something may have stepped in front. Until such a reading arrives the answer is
-//! [`Check::Pending`]; the pilot waits up to [`crate::CartoConfig::distance_wait`] and then gives
+//! [`Check::Pending`]; the pilot waits up to [`Safety::distance_wait`](crate::config::Safety::distance_wait) and then gives
 //! the move up without moving (fail safe: never drive blind).
 //!
 //! Invariants:

@@ -5,7 +5,7 @@
 
 mod fake;
 
-use carto::{Carto, CartoConfig, CartoRuntime};
+use carto::{Carto, CartoRuntime};
 use fake::FakeRobot;
 use protocol::link::{Command, Direction, GuiMessage, MsgOrder};
 use robot_model::time::{Duration, Instant};
@@ -29,8 +29,8 @@ impl World {
         let (s_carto, s_board) = MemLink::pair(baud.then_some(9600), clock.clone());
         let mut cfg = fake::test_config();
         if !baud {
-            cfg.motor_baud = 0;
-            cfg.sensor_baud = 0;
+            cfg.boards.motor_baud = 0;
+            cfg.boards.sensor_baud = 0;
         }
         World {
             clock,
@@ -118,7 +118,7 @@ fn issue_14_idle_client_is_closed_and_the_next_served() {
     let (listener, mut connector) = mem_listener(None, clock.clone());
     let (m_carto, _m_board) = MemLink::pair(None, clock.clone());
     let (s_carto, _s_board) = MemLink::pair(None, clock.clone());
-    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..fake::test_config() };
+    let cfg = fake::test_config_with(|c| c.client.idle_limit = Some(Duration::from_secs(2)));
     let mut rt = CartoRuntime::new(Carto::new(cfg), listener, m_carto, s_carto);
     let mut silent = connector.connect().unwrap();
     let mut now = Instant::ZERO;
@@ -254,7 +254,7 @@ fn idle_limited() -> (CartoRuntime<MemListener, MemLink, MemLink>, MemLink, [Mem
     let (listener, mut connector) = mem_listener(None, clock.clone());
     let (m_carto, m_board) = MemLink::pair(None, clock.clone());
     let (s_carto, s_board) = MemLink::pair(None, clock);
-    let cfg = CartoConfig { client_idle_limit: Some(Duration::from_secs(2)), ..fake::test_config() };
+    let cfg = fake::test_config_with(|c| c.client.idle_limit = Some(Duration::from_secs(2)));
     let rt = CartoRuntime::new(Carto::new(cfg), listener, m_carto, s_carto);
     let client = connector.connect().unwrap();
     (rt, client, [m_board, s_board])

@@ -99,7 +99,10 @@ fn after_a_turn_on_the_spot_the_shift_before_the_next_turn_goes_back_the_way_the
 fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows() {
     // a 5 cm clearance, so that the surface bars a good part of the way back, and 0.45 m cells,
     // so that a shift may reach 11 cm
-    let mut h = ready_with(CartoConfig { clearance_m: 0.05, cell_size_m: 0.45, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.safety.clearance_m = 0.05;
+        c.cell_size_m = 0.45;
+    }));
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
     // a floor plan with one point 13.5 cm east of cell (5, 5)'s centre, 5 mm ahead of the front
@@ -140,7 +143,7 @@ fn a_turn_between_two_close_walls_is_refused() {
 
 #[test]
 fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
-    let mut h = ready_with(CartoConfig { scan_deg: 30.0, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config_with(|c| c.safety.scan_deg = Some(30.0)));
     h.robot.distance_cm = 80.0; // straight ahead: clear
     h.run_ms(150);
     h.send(cartography(Command::Forward));
@@ -166,7 +169,7 @@ fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
     // cell (5, 5) facing east, 0.30 m cells: a known point 25 cm ahead and 13.5 cm left of the
     // centre line, 5 mm inside the 14 cm half corridor (body 12 cm and 2 cm of clearance)
     let forward = |stop_within_m: f64| {
-        let mut h = ready_with(CartoConfig { stop_within_m, ..fake::test_config() });
+        let mut h = ready_with(fake::test_config_with(|c| c.safety.stop_within_m = stop_within_m));
         h.robot.distance_cm = -1.0;
         h.run_ms(150);
         h.carto.add_known_surfaces([(5.0 * 0.30 + 0.25, -5.0 * 0.30 + 0.135)]);
@@ -196,7 +199,7 @@ fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
 
 #[test]
 fn the_scan_drives_when_the_path_is_clear() {
-    let mut h = ready_with(CartoConfig { scan_deg: 30.0, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config_with(|c| c.safety.scan_deg = Some(30.0)));
     h.robot.distance_cm = 80.0;
     h.run_ms(150);
     h.send(cartography(Command::Forward));
@@ -307,9 +310,9 @@ fn a_reading_late_in_a_turn_blocks_the_forward_after_it() {
     let (seen, kept) = forward_after_a_turn(fake::test_config(), Command::Right, 4.0, (75.0, 105.0));
     assert_eq!(seen, BLOCKED_SOUTH);
     assert!(kept >= 1);
-    // without the readings in turns only the "no echo" at rest counts, and the robot drives
-    let off = CartoConfig { turn_readings: false, ..fake::test_config() };
-    let (blind, kept) = forward_after_a_turn(off, Command::Right, 4.0, (75.0, 105.0));
+    // control: when the turn hears nothing there, only the "no echo" at rest counts, and the
+    // robot drives
+    let (blind, kept) = forward_after_a_turn(fake::test_config(), Command::Right, -1.0, (75.0, 105.0));
     assert_eq!((blind, kept), (DROVE_SOUTH.to_vec(), 0));
     // the same to the left, towards NORTH (270 degrees clockwise from east)
     let (seen, _) = forward_after_a_turn(fake::test_config(), Command::Left, 4.0, (255.0, 285.0));
@@ -335,7 +338,10 @@ fn a_reading_in_a_turn_is_kept_on_the_edge_of_the_cone_away_from_the_path() {
     assert_eq!(seen, DROVE_SOUTH);
     // with a cone of no width the edge is the central ray, and the same reading blocks (with no
     // room to drive on a track aside: 13 cm beside the path, it would clear the point)
-    let narrow = CartoConfig { sonar_cone_deg: 0.0, stop_within_m: 0.01, ..fake::test_config() };
+    let narrow = fake::test_config_with(|c| {
+        c.sonar.cone_deg = 0.0;
+        c.safety.stop_within_m = 0.01;
+    });
     let (seen, kept) = forward_after_a_turn(narrow, Command::Right, 30.0, (72.0, 75.0));
     assert!(kept >= 1, "no reading kept during the turn");
     assert_eq!(seen, WAY_SOUTH_NOT_CLEAR, "13 cm beside the path: within the clearance, not the body");
@@ -385,7 +391,7 @@ fn send_forwards(h: &mut Harness, forwards: u8) {
 /// body is held once it is `pinned_after_m` along, its wheels spinning on, and let go once Carto
 /// has seen the stall, so the back-off moves it. Runs until the task's MOVE_DONE.
 fn forwards_with_stall_watch(forwards: u8, pinned_after_m: Option<f64>, watch: bool) -> Harness {
-    let mut h = ready_with(CartoConfig { stall_watch: watch, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config_with(|c| c.safety.stall_watch = watch));
     h.robot.send_telemetry = true;
     let wall_cm = 100.0;
     h.robot.distance_cm = wall_cm;
@@ -442,7 +448,11 @@ fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
 /// something it touches turns it `nudge_deg` counter-clockwise at once: the IMU sees it, the
 /// wheels do not. Runs until the first MOVE_DONE.
 fn forwards_nudged(forwards: u8, nudge_deg: f64, watch: bool) -> Harness {
-    let mut h = ready_with(CartoConfig { push_watch: watch, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config_with(|c| {
+        if let Some(drift) = c.imu.drift.as_mut() {
+            drift.push_watch = watch;
+        }
+    }));
     h.robot.send_telemetry = true;
     h.run_ms(150);
     send_forwards(&mut h, forwards);
@@ -536,13 +546,13 @@ fn a_heading_gap_left_by_the_turn_before_is_not_taken_for_a_push() {
     assert_eq!(push_counts(&h), (0, 1, 1));
 }
 
-/// Two FORWARDs east from the start cell's centre, with readings while driving on or off. While
-/// the first FORWARD has driven 2–20 cm the sonar hears a post `post_m` ahead of the start
-/// cell's centre (at rest, before and after, it reads no echo: a leg the cone holds only from
-/// farther back). The replies to the second FORWARD, and how many readings Carto kept while
+/// Two FORWARDs east from the start cell's centre. With `heard`, while the first FORWARD has
+/// driven 2–20 cm the sonar hears a post `post_m` ahead of the start cell's centre (at rest,
+/// before and after, it reads no echo: a leg the cone holds only from farther back); without,
+/// it never hears the post. The replies to the second FORWARD, and how many readings Carto kept while
 /// driving.
-fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMessage>, u64) {
-    let (replies, kept, _, _) = forwards_after_hearing(drive_readings, post_m, 2);
+fn second_forward_after_hearing(heard: bool, post_m: f64) -> (Vec<GuiMessage>, u64) {
+    let (replies, kept, _, _) = forwards_after_hearing(heard, post_m, 2);
     (replies, kept)
 }
 
@@ -550,18 +560,18 @@ fn second_forward_after_hearing(drive_readings: bool, post_m: f64) -> (Vec<GuiMe
 /// the second, how many readings were kept, the replies to the third (empty for two), and the
 /// harness after the last.
 fn forwards_after_hearing(
-    drive_readings: bool,
+    heard: bool,
     post_m: f64,
     forwards: u8,
 ) -> (Vec<GuiMessage>, u64, Vec<GuiMessage>, Harness) {
-    let mut h = ready_with(CartoConfig { drive_readings, ..fake::test_config() });
+    let mut h = ready_with(fake::test_config());
     h.robot.send_telemetry = true;
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
     h.send(cartography(Command::Forward));
     for _ in 0..8000 {
-        let heard = (0.02..=0.20).contains(&h.robot.x);
-        h.robot.distance_cm = if heard { ((post_m - h.robot.x - 0.13) * 100.0) as f32 } else { -1.0 };
+        let hearing = heard && (0.02..=0.20).contains(&h.robot.x);
+        h.robot.distance_cm = if hearing { ((post_m - h.robot.x - 0.13) * 100.0) as f32 } else { -1.0 };
         h.tick();
         if h.move_done_count() == 1 {
             break;
@@ -593,7 +603,8 @@ fn a_post_heard_while_driving_blocks_the_next_forward() {
     let (seen, kept) = second_forward_after_hearing(true, 0.55);
     assert!(kept >= 1, "no reading kept while driving");
     assert_eq!(seen, vec![GuiMessage::SetObstaclePosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
-    // without the readings while driving only the "no echo" at rest counts, and the robot drives
+    // control: when the sonar does not hear the post while driving, only the "no echo" at rest
+    // counts, and the robot drives
     let (blind, kept) = second_forward_after_hearing(false, 0.55);
     assert_eq!(kept, 0);
     assert_eq!(blind, vec![GuiMessage::SetRobotPosition { x: 5, y: 7 }, GuiMessage::MoveDone]);
@@ -699,13 +710,13 @@ fn a_forward_after_a_turn_looks_past_it_first_and_is_blocked_by_what_it_hears() 
     // 4 cm while the robot faces 6-25 degrees past SOUTH: the side of the path the right turn
     // from EAST did not sweep. The turn's MOVE_DONE came first: the look belongs to the FORWARD
     let look = fake::test_config();
-    assert_eq!(look.look_past_turn_deg, 20.0, "the default");
+    assert_eq!(look.safety.look_past_turn_deg, Some(20.0), "the default");
     let (seen, kept, past_in_turn) = forward_hearing_past_a_right_turn(look, 4.0, (96.0, 115.0));
     assert!(past_in_turn < 5.0, "the turn's own command went {past_in_turn:.1} degrees past SOUTH");
     assert!(kept >= 1, "no reading kept past the turn");
     assert_eq!(seen, WAY_SOUTH_NOT_CLEAR, "4 cm from the sonar: on the way, short of the next cell's body");
     // without the look nothing is heard there, and the robot drives
-    let off = CartoConfig { look_past_turn_deg: 0.0, ..fake::test_config() };
+    let off = fake::test_config_with(|c| c.safety.look_past_turn_deg = None);
     let (blind, kept, _) = forward_hearing_past_a_right_turn(off, 4.0, (96.0, 115.0));
     assert_eq!((blind, kept), (DROVE_SOUTH.to_vec(), 0));
 }

@@ -4,7 +4,6 @@
 
 mod fake;
 
-use carto::CartoConfig;
 use fake::{Harness, POSE};
 use protocol::link::{Command, Direction, GuiMessage};
 use robot_model::grid::Heading;
@@ -366,7 +365,7 @@ fn bumper_during_forward_stops_reports_obstacle_and_backs_off() {
 
 #[test]
 fn jammed_wheels_time_out_and_stop() {
-    let cfg = CartoConfig { move_timeout: Duration::from_secs(2), ..fake::test_config() };
+    let cfg = fake::test_config_with(|c| c.motion.move_timeout = Duration::from_secs(2));
     let mut h = Harness::with_config(cfg);
     h.warm_up();
     h.send(POSE);

@@ -237,7 +237,7 @@ pub struct SonarParams {
     /// Full cone width, degrees.
     pub cone_deg: f32,
     /// Number of rays cast across the cone (the twin casts them; Carto expects ranges from the
-    /// same fan, `CartoConfig::sonar_rays`).
+    /// same fan, `CartoConfig.sonar.rays`).
     pub rays: u32,
     /// Shortest distance that gives an echo, centimetres.
     pub min_cm: f32,

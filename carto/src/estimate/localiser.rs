@@ -10,7 +10,7 @@
 //!   returns the correction; the pilot moves the odometry by it, so the next FORWARD aims at the
 //!   next cell's centre from the corrected position.
 //! - **What a range is compared with.** With a floor plan (the twin's `--known-room`), the
-//!   nearest surface the sensor model's fan of rays ([`CartoConfig::sonar_rays`], the fan the
+//!   nearest surface the sensor model's fan of rays ([`Sonar::rays`](crate::config::Sonar::rays), the fan the
 //!   twin casts) meets within the incidence limit ([`PoseFilter::correct_echo`]): the plan is
 //!   exact, so every direction it has surfaces in corrects. A fan with rays the sensor does not
 //!   have expects echoes it never returns (a leg between two of its rays), and the oblique
@@ -181,19 +181,19 @@ impl Localiser {
     pub fn new(cfg: &CartoConfig) -> Self {
         let params = GridParams::default();
         let sonar = SonarModel::from_config(cfg);
-        let half_cone = cfg.sonar_cone_deg / 2.0;
-        let fan_deg = sonar_fan_deg(half_cone, cfg.sonar_rays);
+        let half_cone = cfg.sonar.cone_deg / 2.0;
+        let fan_deg = sonar_fan_deg(half_cone, cfg.sonar.rays);
         // one range against the grid: the sonar's noise, its 1 cm steps and where in its cell
         // the surface lies (a uniform error over a step has σ = step / √12)
         let uniform = |step: f64| step / 12f64.sqrt();
-        let range_sigma_m = (cfg.sonar_sigma_m.powi(2)
+        let range_sigma_m = (cfg.sonar.sigma_m.powi(2)
             + uniform(sonar.quantisation_m).powi(2)
             + uniform(params.resolution_m).powi(2))
         .sqrt();
         Localiser {
             grid: EvidenceGrid::new(params),
             sonar,
-            noise: MotionNoise { along_per_m: cfg.odometry_sigma_per_m, ..MotionNoise::default() },
+            noise: MotionNoise { along_per_m: cfg.chassis.odometry_sigma_per_m, ..MotionNoise::default() },
             filter: None,
             touched: false,
             known: Vec::new(),
@@ -202,12 +202,12 @@ impl Localiser {
             last_straight: None,
             last_learnt: None,
             fan_deg,
-            incidence_limit_deg: cfg.sonar_incidence_deg,
-            mount_m: cfg.sonar_mount_m,
+            incidence_limit_deg: cfg.sonar.incidence_deg,
+            mount_m: cfg.sonar.mount_m,
             range_sigma_m,
-            pair_sigma_m: (2.0 * (cfg.sonar_sigma_m.powi(2) + uniform(sonar.quantisation_m).powi(2))).sqrt(),
-            half_length_m: cfg.body_length_m / 2.0,
-            half_width_m: cfg.body_width_m / 2.0,
+            pair_sigma_m: (2.0 * (cfg.sonar.sigma_m.powi(2) + uniform(sonar.quantisation_m).powi(2))).sqrt(),
+            half_length_m: cfg.chassis.body_length_m / 2.0,
+            half_width_m: cfg.chassis.body_width_m / 2.0,
             counters: LocaliserCounters::default(),
         }
     }

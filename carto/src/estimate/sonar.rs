@@ -92,10 +92,10 @@ impl SonarModel {
     /// The model of the sonar Carto's configuration describes.
     pub fn from_config(cfg: &CartoConfig) -> Self {
         SonarModel {
-            cone_half_deg: cfg.sonar_cone_deg / 2.0,
-            max_range_m: cfg.sonar_max_m,
-            range_sigma_m: cfg.sonar_sigma_m,
-            no_echo_reach_m: SonarModel::default().no_echo_reach_m.min(cfg.sonar_max_m),
+            cone_half_deg: cfg.sonar.cone_deg / 2.0,
+            max_range_m: cfg.sonar.max_m,
+            range_sigma_m: cfg.sonar.sigma_m,
+            no_echo_reach_m: SonarModel::default().no_echo_reach_m.min(cfg.sonar.max_m),
             ..SonarModel::default()
         }
     }

@@ -13,7 +13,7 @@ impl Motor {
     pub(super) fn fresh_counts(&self, now: Instant, s: &SensorState) -> Result<[i32; 4], MoveError> {
         let c = s.counts().ok_or(MoveError::MissingReading { sensor: "encoder" })?;
         let age = now.saturating_since(c.at);
-        if age > self.cfg.sensor_stale_after {
+        if age > self.cfg.boards.sensor_stale_after {
             return Err(MoveError::StaleReading { sensor: "encoder", age_ms: age.total_millis() });
         }
         Ok(c.value)
@@ -22,7 +22,7 @@ impl Motor {
     pub(super) fn fresh_yaw(&self, now: Instant, s: &SensorState) -> Result<f64, MoveError> {
         let y = s.yaw_deg().ok_or(MoveError::MissingReading { sensor: "imu heading" })?;
         let age = now.saturating_since(y.at);
-        if age > self.cfg.sensor_stale_after {
+        if age > self.cfg.boards.sensor_stale_after {
             return Err(MoveError::StaleReading { sensor: "imu heading", age_ms: age.total_millis() });
         }
         Ok(y.value)
@@ -80,17 +80,16 @@ impl Motor {
         };
         let overshoot = -err * sign_of(target_m);
         let cfg = &self.cfg;
-        self.coast_bias_m = (self.coast_bias_m + cfg.coast_learn_gain * overshoot)
-            .clamp(-0.5 * cfg.distance_tolerance_m, 2.0 * cfg.distance_tolerance_m);
+        self.coast_bias_m = (self.coast_bias_m + cfg.motion.coast_learn_gain * overshoot)
+            .clamp(-0.5 * cfg.motion.distance_tolerance_m, 2.0 * cfg.motion.distance_tolerance_m);
     }
 
     /// Heading hold on `omega`, percent.
     pub(super) fn hold_omega(&self, m: &Move, now: Instant, s: &SensorState) -> f64 {
         let cfg = &self.cfg;
         match (m.hold_deg, s.predicted_yaw(now, cfg)) {
-            (Some(h), Some(y)) => {
-                (cfg.hold_gain_pct_per_deg * (h - y)).clamp(-cfg.hold_max_pct, cfg.hold_max_pct)
-            }
+            (Some(h), Some(y)) => (cfg.motion.hold_gain_pct_per_deg * (h - y))
+                .clamp(-cfg.motion.hold_max_pct, cfg.motion.hold_max_pct),
             _ => 0.0,
         }
     }
@@ -115,7 +114,7 @@ impl Motor {
     pub(super) fn step(&self, now: Instant, m: &mut Move, s: &SensorState) -> Step {
         let cfg = &self.cfg;
         let elapsed = now.saturating_since(m.started);
-        if elapsed >= cfg.move_timeout {
+        if elapsed >= cfg.motion.move_timeout {
             return Step::Finished(Err(MoveError::Timeout { after_ms: elapsed.total_millis() }));
         }
         let is_distance = matches!(m.goal, Goal::Distance { .. });
@@ -139,23 +138,23 @@ impl Motor {
                 let Some(err) = self.error(m, now, s, true) else {
                     return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
                 };
-                let ramp = now.saturating_since(since).as_secs_f64() * cfg.accel_pct_per_s;
+                let ramp = now.saturating_since(since).as_secs_f64() * cfg.motion.accel_pct_per_s;
                 if is_distance {
                     let speed = s.forward_speed_mps(now, cfg).abs();
-                    let lead =
-                        (speed * cfg.stop_lead_s + self.coast_bias_m).max(0.3 * cfg.distance_tolerance_m);
+                    let lead = (speed * cfg.motion.stop_lead_s + self.coast_bias_m)
+                        .max(0.3 * cfg.motion.distance_tolerance_m);
                     if err.abs() <= lead || sign_of(err) != sign {
                         m.phase = Phase::Settling { stopped_at: now };
                         return Step::Continue(Drive::STOP);
                     }
-                    let pct = (cfg.slow_gain_pct_per_m * err.abs())
-                        .min(cfg.cruise_pct)
-                        .min(cfg.min_drive_pct + ramp)
-                        .max(cfg.min_drive_pct);
+                    let pct = (cfg.motion.slow_gain_pct_per_m * err.abs())
+                        .min(cfg.motion.cruise_pct)
+                        .min(cfg.motion.min_drive_pct + ramp)
+                        .max(cfg.motion.min_drive_pct);
                     // Lateral hold: strafe back to the track while driving.
                     let left = self.odo.predicted(now, s, cfg).left_m - m.track_left_m;
-                    let vy =
-                        (-cfg.lateral_gain_pct_per_m * left).clamp(-cfg.lateral_max_pct, cfg.lateral_max_pct);
+                    let vy = (-cfg.motion.lateral_gain_pct_per_m * left)
+                        .clamp(-cfg.motion.lateral_max_pct, cfg.motion.lateral_max_pct);
                     Step::Continue(Drive {
                         vx: pct_i8(sign * pct),
                         vy: pct_i8(vy),
@@ -163,7 +162,7 @@ impl Motor {
                     })
                 } else {
                     let rate = s.yaw_rate_dps(now, cfg).abs();
-                    let lead = (rate * cfg.stop_lead_s).max(0.25 * cfg.heading_tolerance_deg);
+                    let lead = (rate * cfg.motion.stop_lead_s).max(0.25 * cfg.motion.heading_tolerance_deg);
                     if err.abs() <= lead || sign_of(err) != sign {
                         m.phase = Phase::Settling { stopped_at: now };
                         return Step::Continue(Drive::STOP);
@@ -175,7 +174,7 @@ impl Motor {
                     match m.progress {
                         Some((at, left)) if at >= since && left_now > left - JAM_PROGRESS_DEG => {
                             let stuck = now.saturating_since(at);
-                            if stuck >= cfg.jam_after {
+                            if stuck >= cfg.motion.jam_after {
                                 return Step::Finished(Err(MoveError::Jammed {
                                     after_ms: stuck.total_millis(),
                                     left_deg: left_now,
@@ -184,10 +183,10 @@ impl Motor {
                         }
                         _ => m.progress = Some((now, left_now)),
                     }
-                    let pct = (cfg.turn_gain_pct_per_deg * err.abs())
-                        .min(cfg.turn_max_pct)
-                        .min(cfg.turn_min_pct + ramp)
-                        .max(cfg.turn_min_pct);
+                    let pct = (cfg.motion.turn_gain_pct_per_deg * err.abs())
+                        .min(cfg.motion.turn_max_pct)
+                        .min(cfg.motion.turn_min_pct + ramp)
+                        .max(cfg.motion.turn_min_pct);
                     Step::Continue(Drive { vx: 0, vy: 0, omega: pct_i8(sign * pct) })
                 }
             }
@@ -197,12 +196,12 @@ impl Motor {
                 }
                 let err = m.track_left_m - self.odo.predicted(now, s, cfg).left_m;
                 let speed = self.lateral_speed_mps(now, s).abs();
-                let lead = (speed * cfg.stop_lead_s).max(0.3 * cfg.lateral_tolerance_m);
+                let lead = (speed * cfg.motion.stop_lead_s).max(0.3 * cfg.motion.lateral_tolerance_m);
                 if err.abs() <= lead || sign_of(err) != sign {
                     m.phase = Phase::Settling { stopped_at: now };
                     return Step::Continue(Drive::STOP);
                 }
-                let pct = (cfg.lateral_gain_pct_per_m * err.abs()).max(cfg.min_strafe_pct);
+                let pct = (cfg.motion.lateral_gain_pct_per_m * err.abs()).max(cfg.motion.min_strafe_pct);
                 Step::Continue(Drive {
                     vx: 0,
                     vy: pct_i8(sign * pct),
@@ -210,7 +209,7 @@ impl Motor {
                 })
             }
             Phase::Settling { stopped_at } => {
-                let rest = stopped_at + cfg.settle_time;
+                let rest = stopped_at + cfg.motion.settle_time;
                 let settled = if is_distance {
                     s.counts_since().is_some_and(|t| t >= rest)
                 } else {
@@ -222,7 +221,11 @@ impl Motor {
                 let Some(err) = self.error(m, now, s, false) else {
                     return Step::Finished(Err(MoveError::MissingReading { sensor: "odometry" }));
                 };
-                let tol = if is_distance { cfg.distance_tolerance_m } else { cfg.heading_tolerance_deg };
+                let tol = if is_distance {
+                    cfg.motion.distance_tolerance_m
+                } else {
+                    cfg.motion.heading_tolerance_deg
+                };
                 // A distance move also ends on its track (the odometry has integrated the readings
                 // at rest by now: `poll` updates it first).
                 let left = if is_distance { self.odo.offset().left_m - m.track_left_m } else { 0.0 };
@@ -233,12 +236,12 @@ impl Motor {
                 {
                     m.first_stop_err = Some(err);
                 }
-                let on_track = left.abs() <= cfg.lateral_tolerance_m;
+                let on_track = left.abs() <= cfg.motion.lateral_tolerance_m;
                 if err.abs() <= tol && on_track {
                     tracing::debug!(error = err, left_m = left, corrections = m.corrections, "move done");
                     return Step::Finished(Ok(()));
                 }
-                if m.corrections >= cfg.max_corrections {
+                if m.corrections >= cfg.motion.max_corrections {
                     if err.abs() <= tol {
                         // Off the track but at the target: the next FORWARD keeps correcting.
                         tracing::warn!(left_m = left, "move ends off its track after all corrections");

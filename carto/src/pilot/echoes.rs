@@ -194,7 +194,7 @@ impl Echoes {
     /// ([`Surroundings::clearing_shift`]).
     pub(super) fn clearing_shift(&self, frame: Pose2, max_m: f64, step_m: f64) -> Option<(f64, f64)> {
         let s = self.safety;
-        self.at_rest.clearing_shift(frame, s.turn_clear_m, max_m, step_m, s.strafe_shifts)
+        self.at_rest.clearing_shift(frame, s.turn_clear_m, max_m, step_m)
     }
 
     /// How much of the way from `robot` back to its cell's centre (`off` from it), in steps of

@@ -32,7 +32,7 @@ pub(super) struct ForwardWatch {
     /// The push watch of the FORWARD running: the drift estimate's counts when it started
     /// (module docs, "Pushed"); `None` when the watch is off.
     push: Option<DriftCounts>,
-    /// [`CartoConfig::push_watch`].
+    /// [`ImuDrift::push_watch`](crate::config::ImuDrift::push_watch).
     push_on: bool,
     /// When the last reading taken while a FORWARD drove arrived.
     last_reading: Option<Instant>,
@@ -41,12 +41,13 @@ pub(super) struct ForwardWatch {
 }
 
 impl ForwardWatch {
-    /// The watches [`CartoConfig::stall_watch`] and [`CartoConfig::push_watch`] turn on.
+    /// The watches [`Safety::stall_watch`](crate::config::Safety::stall_watch) and
+    /// [`ImuDrift::push_watch`](crate::config::ImuDrift::push_watch) turn on.
     pub(super) fn new(cfg: &CartoConfig) -> ForwardWatch {
         ForwardWatch {
-            stall: cfg.stall_watch.then(|| StallWatch::new(cfg.sonar_sigma_m, cfg.drive_timing_m())),
+            stall: cfg.safety.stall_watch.then(|| StallWatch::new(cfg.sonar.sigma_m, cfg.drive_timing_m())),
             push: None,
-            push_on: cfg.push_watch,
+            push_on: cfg.imu.drift.as_ref().is_some_and(|drift| drift.push_watch),
             last_reading: None,
             from_m: 0.0,
         }
@@ -92,7 +93,7 @@ impl ForwardWatch {
             return None;
         }
         self.last_reading = Some(r.at);
-        let offset = io.motor.cell_offset(r.at - io.motor.config().sonar_lag, io.sensors);
+        let offset = io.motor.cell_offset(r.at - io.motor.config().sonar.lag, io.sensors);
         // a FORWARD drives at most 1½ cells (half a cell of slack either way): anything else is
         // a bad extrapolation, not a place to put an echo
         let cell = io.motor.config().cell_size_m;

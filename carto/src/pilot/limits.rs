@@ -15,6 +15,7 @@ pub(super) const FAR_SIGMAS: f64 = 3.0;
 /// The geometry the checks need, from [`CartoConfig`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Safety {
+    /// How far each way the scan before a FORWARD looks, degrees (0: no scan).
     pub(super) scan_deg: f64,
     pub(super) cell_m: f64,
     pub(super) mount_m: f64,
@@ -25,13 +26,6 @@ pub(super) struct Safety {
     pub(super) clearance_m: f64,
     /// The swept circle of a turn plus the clearance: no known echo may lie inside it.
     pub(super) turn_clear_m: f64,
-    pub(super) safe_turns: bool,
-    /// Shifts before a turn may strafe across the heading too.
-    pub(super) strafe_shifts: bool,
-    /// Keep the readings taken while a turn runs.
-    pub(super) turn_readings: bool,
-    /// Keep the readings taken while a FORWARD drives.
-    pub(super) drive_readings: bool,
     /// How far past a finished turn the robot turns on and back, listening, degrees (0: off).
     pub(super) look_past_deg: f64,
     /// How long before its frame arrives a reading was measured.
@@ -41,31 +35,27 @@ pub(super) struct Safety {
     /// [`CartoConfig::drive_timing_m`].
     pub(super) drive_timing_m: f64,
     /// How far beside the line through the centres a FORWARD's track may lie, metres
-    /// ([`CartoConfig::stop_within_m`] less the lateral tolerance it ends within).
+    /// ([`Safety::stop_within_m`](crate::config::Safety::stop_within_m) less the lateral tolerance it ends within).
     pub(super) aside_max_m: f64,
 }
 
 impl Safety {
     pub(super) fn new(cfg: &CartoConfig) -> Safety {
         Safety {
-            scan_deg: cfg.scan_deg.abs(),
+            scan_deg: cfg.safety.scan_deg.map_or(0.0, f64::abs),
             cell_m: cfg.cell_size_m,
-            mount_m: cfg.sonar_mount_m,
-            half_cone_deg: 0.5 * cfg.sonar_cone_deg,
-            max_range_m: cfg.sonar_max_m,
-            half_length_m: 0.5 * cfg.body_length_m,
-            half_width_m: 0.5 * cfg.body_width_m,
-            clearance_m: cfg.clearance_m,
-            turn_clear_m: cfg.turn_radius_m() + cfg.clearance_m,
-            safe_turns: cfg.safe_turns,
-            strafe_shifts: cfg.strafe_shifts,
-            turn_readings: cfg.turn_readings,
-            drive_readings: cfg.drive_readings,
-            look_past_deg: cfg.look_past_turn_deg.abs(),
-            sonar_lag_s: cfg.sonar_lag.as_secs_f64(),
-            sonar_sigma_m: cfg.sonar_sigma_m,
+            mount_m: cfg.sonar.mount_m,
+            half_cone_deg: 0.5 * cfg.sonar.cone_deg,
+            max_range_m: cfg.sonar.max_m,
+            half_length_m: 0.5 * cfg.chassis.body_length_m,
+            half_width_m: 0.5 * cfg.chassis.body_width_m,
+            clearance_m: cfg.safety.clearance_m,
+            turn_clear_m: cfg.turn_radius_m() + cfg.safety.clearance_m,
+            look_past_deg: cfg.safety.look_past_turn_deg.map_or(0.0, f64::abs),
+            sonar_lag_s: cfg.sonar.lag.as_secs_f64(),
+            sonar_sigma_m: cfg.sonar.sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
-            aside_max_m: (cfg.stop_within_m - cfg.lateral_tolerance_m).max(0.0),
+            aside_max_m: (cfg.safety.stop_within_m - cfg.motion.lateral_tolerance_m).max(0.0),
         }
     }
 

@@ -3,19 +3,19 @@
 //! [`crate::surroundings`].
 //!
 //! - **Scan.** After the straight reading of a FORWARD is clear, the robot looks
-//!   [`CartoConfig::scan_deg`](crate::CartoConfig::scan_deg) to the left, then to the right, taking one reading at rest each, and
+//!   [`Safety::scan_deg`](crate::config::Safety::scan_deg) to the left, then to the right, taking one reading at rest each, and
 //!   turns back to the grid heading. A reading that does not come within
-//!   [`CartoConfig::distance_wait`](crate::CartoConfig::distance_wait) leaves the scan incomplete and the FORWARD is not driven
+//!   [`Safety::distance_wait`](crate::config::Safety::distance_wait) leaves the scan incomplete and the FORWARD is not driven
 //!   (never drive blind); the robot still turns back first.
 //! - **Corridor.** The FORWARD runs only if no echo point lies in the rectangle the body sweeps:
-//!   as wide as the body plus [`CartoConfig::clearance_m`](crate::CartoConfig::clearance_m) either side, from the front face to the
+//!   as wide as the body plus [`Safety::clearance_m`](crate::config::Safety::clearance_m) either side, from the front face to the
 //!   front face at the next cell's centre (a straight echo blocks exactly as the one-cell
 //!   threshold does). A body off the line through the centres (a turn made off the centre, a
 //!   stop within its tolerance) strafes back to its track while it drives: the strip its flank
 //!   sweeps on the way there, from its back face to the corridor's end, must hold no point
 //!   either. When an echo point lies in the way, the FORWARD may run on a track beside the
-//!   line through the centres, up to [`CartoConfig::stop_within_m`](crate::CartoConfig::stop_within_m) less
-//!   [`CartoConfig::lateral_tolerance_m`](crate::CartoConfig::lateral_tolerance_m) from it (the move ends within that tolerance of its
+//!   line through the centres, up to [`Safety::stop_within_m`](crate::config::Safety::stop_within_m) less
+//!   [`Motion::lateral_tolerance_m`](crate::config::Motion::lateral_tolerance_m) from it (the move ends within that tolerance of its
 //!   track), in steps of [`ASIDE_STEP_M`](super::limits::ASIDE_STEP_M), nearest first: the corridor along that track must hold
 //!   no point (the mecanum wheels strafe to it while driving; the body's own footprint is free).
 //!   The reason: a passage that leaves the body less than the clearance at the centre, but
@@ -78,15 +78,15 @@
 //!   corrected, and a range to them would measure nothing.
 //! - **Readings in turns.** The sonar keeps measuring while the robot turns on the spot. A
 //!   reading that arrives while the heading is within [`TURN_READING_WINDOW_DEG`] of the turn's
-//!   target, with an echo no farther than one cell, is kept ([`CartoConfig::turn_readings`](crate::CartoConfig::turn_readings)):
+//!   target, with an echo no farther than one cell, is kept:
 //!   near the end of a turn the cone sweeps beside the path of the FORWARD that may follow,
 //!   where the straight reading at rest does not look (a chair leg or a box corner at the side
 //!   of the next cell), and it sees a sofa too close for the reading at rest (an echo under
 //!   the HC-SR04's 2 cm minimum reads "no echo"). They are kept as long as the echoes heard at
 //!   rest are (below, "Kept while they hold"). The heading is
-//!   the IMU's, carried at the yaw rate to when the sonar measured ([`CartoConfig::sonar_lag`](crate::CartoConfig::sonar_lag),
+//!   the IMU's, carried at the yaw rate to when the sonar measured ([`Sonar::lag`](crate::config::Sonar::lag),
 //!   half its cycle, before the frame arrived; carried at most
-//!   [`CartoConfig::max_extrapolation`](crate::CartoConfig::max_extrapolation)). The echo could come from anywhere across the cone; it
+//!   [`Boards::max_extrapolation`](crate::config::Boards::max_extrapolation)). The echo could come from anywhere across the cone; it
 //!   is kept on the cone's edge farther from the next FORWARD's line (the heading's line through
 //!   where the robot was), [`FAR_SIGMAS`](super::limits::FAR_SIGMAS) sonar σ beyond its range, so it blocks that FORWARD
 //!   only when the whole arc lies in the body's path. These points feed only the corridor
@@ -96,7 +96,7 @@
 //!
 //!   The end of a turn sweeps the cone across one side of the next FORWARD's path only (the
 //!   side the turn comes from). So after a mapping turn and its `MOVE_DONE` the robot turns on
-//!   past the new heading, the way the turn went, by [`CartoConfig::look_past_turn_deg`](crate::CartoConfig::look_past_turn_deg), and
+//!   past the new heading, the way the turn went, by [`Safety::look_past_turn_deg`](crate::config::Safety::look_past_turn_deg), and
 //!   back, as a look (the reference heading stays), and keeps the readings of that sweep (all
 //!   of them, within the look's angle plus 5°) by the same rules: the other side. Cute's next
 //!   command waits in the queue meanwhile; the `MOVE_DONE` has gone out, so Cute and Carto agree
@@ -109,8 +109,8 @@
 //! - **Readings while driving.** The sonar keeps measuring while a FORWARD drives, and from
 //!   farther back its cone is wider: 24 cm across at 0.9 m, about the body's width, against
 //!   12 cm at 0.45 m, from the next cell's centre. Every echo heard while a FORWARD drives, no
-//!   farther than the next FORWARD's corridor can reach, is kept
-//!   ([`CartoConfig::drive_readings`](crate::CartoConfig::drive_readings)), placed from where the odometry, carried to when the
+//!   farther than the next FORWARD's corridor can reach, is kept,
+//!   placed from where the odometry, carried to when the
 //!   sonar measured, says the robot was, on the cone's edge farther from the heading's line as
 //!   a reading in a turn is, and a little beyond its range: [`FAR_SIGMAS`](super::limits::FAR_SIGMAS) sonar σ (the closest
 //!   of the ten readings a second of a wall just past the corridor's end would otherwise fall
@@ -218,7 +218,7 @@ impl Pilot {
         let Some(r) = io.us.latest() else { return };
         // a turn that ended on this poll has already moved the reference heading to its target
         // while the stored pose still faces the old one: the believed heading would be 90° off
-        if !s.turn_readings || !io.motor.is_busy() || r.at < since || !self.echoes.take_turn_reading(r.at) {
+        if !io.motor.is_busy() || r.at < since || !self.echoes.take_turn_reading(r.at) {
             return;
         }
         let range = f64::from(r.value) / 100.0;
@@ -233,7 +233,7 @@ impl Pilot {
         // the heading when the sonar measured: the last IMU sample carried at the yaw rate to
         // the frame's arrival, less the sonar's lag
         let cfg = io.motor.config();
-        let max_s = cfg.max_extrapolation.as_secs_f64();
+        let max_s = cfg.boards.max_extrapolation.as_secs_f64();
         let measured_after_sample_s = (r.at.saturating_since(yaw.at).as_secs_f64()
             - yaw.at.saturating_since(r.at).as_secs_f64()
             - s.sonar_lag_s)
@@ -255,11 +255,11 @@ impl Pilot {
     /// made; a look would make a STOP land before the batch's first position more often.
     pub(super) fn look_wanted(&self) -> bool {
         let s = self.safety;
-        s.turn_readings && s.look_past_deg > 0.0 && self.place.pose().is_some() && self.tasks.mapping()
+        s.look_past_deg > 0.0 && self.place.pose().is_some() && self.tasks.mapping()
     }
 
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
-    /// the turn went, by [`CartoConfig::look_past_turn_deg`](crate::CartoConfig::look_past_turn_deg), the sonar listening, then back.
+    /// the turn went, by [`Safety::look_past_turn_deg`](crate::config::Safety::look_past_turn_deg), the sonar listening, then back.
     /// When the look cannot start, the next command follows at once.
     pub(super) fn look_past(&mut self, io: &mut Io<'_>, turn: Move, unacked: Option<Move>) {
         let past = if turn == Move::Left { self.safety.look_past_deg } else { -self.safety.look_past_deg };
@@ -345,7 +345,7 @@ impl Pilot {
         let range = f64::from(r.cm) / 100.0;
         // farther than this from the sonar, nothing can lie in the next FORWARD's corridor
         let reach_m = 2.0 * s.cell_m + s.half_length_m;
-        if !s.drive_readings || !(0.0..=reach_m).contains(&range) {
+        if !(0.0..=reach_m).contains(&range) {
             return;
         }
         let Some(pose) = self.place.pose() else { return };
@@ -484,9 +484,8 @@ impl Pilot {
     /// A turn whose swept circle clears every known echo: at once, after a shift, or refused.
     pub(super) fn turn_safely(&mut self, io: &mut Io<'_>, mv: Move) {
         let s = self.safety;
-        let robot = match self.place.believed(io) {
-            Some(robot) if s.safe_turns => robot,
-            _ => return self.start_turn(io, mv),
+        let Some(robot) = self.place.believed(io) else {
+            return self.start_turn(io, mv);
         };
         let Some(hit) = self.echoes.in_turning_circle(robot) else {
             return self.start_turn(io, mv);

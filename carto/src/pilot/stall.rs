@@ -21,7 +21,7 @@
 //! - every echo of the span lies within a tolerance of the line: three sonar σ
 //!   plus the error the moment of a reading adds while driving (the frame carries the sonar's
 //!   latest result, up to one cycle old, and Carto takes half a cycle,
-//!   [`crate::CartoConfig::sonar_lag`]: ± the lag times the cruise speed, 1.1 cm for the
+//!   [`Sonar::lag`](crate::config::Sonar::lag): ± the lag times the cruise speed, 1.1 cm for the
 //!   default robot). One surface answered them all: a new surface coming into the cone, or one
 //!   leaving it, makes a step that does not fit a line, and
 //! - the span holds at least [`STALL_MIN_ECHOES`] echoes in a row (a reading without echo
@@ -37,7 +37,7 @@
 //! echoes that still fit it, and from the first of them (the wheels are trusted up to there) the
 //! body went on by what the range fell from that echo to the line now. The pilot then stops,
 //! sets the odometry to that, answers `SET_OBSTACLE_POSITION` for the cell ahead and, as after
-//! the bumper ([`crate::CartoConfig::back_off_after_bump`]), drives back to the centre of the
+//! the bumper, drives back to the centre of the
 //! cell it started from. The wheels that coast after the stop, the body still held, still count
 //! as motion (about 3 cm), as after the bumper.
 

@@ -9,7 +9,7 @@ use crate::CartoConfig;
 /// A change in the sensor board's liveness.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PeerEvent {
-    /// No keep-state for [`CartoConfig::peer_lost_after`].
+    /// No keep-state for [`Boards::peer_lost_after`](crate::config::Boards::peer_lost_after).
     Lost,
     /// Keep-state heard again after a loss.
     Back,

@@ -23,7 +23,8 @@ fn imu_drift_at_rest_is_learnt_from_the_wheels_and_removed() {
     assert!((s.imu_drift_deg() - raw).abs() < 0.03, "estimate {:.3}", s.imu_drift_deg());
     assert!(s.yaw_deg().unwrap().value.abs() < 0.03, "corrected yaw {:.3}", s.yaw_deg().unwrap().value);
     // off: the raw heading stays
-    let off = CartoConfig { imu_drift_tau_s: 0.0, ..cfg };
+    let mut off = cfg.clone();
+    off.imu.drift = None;
     let mut t = SensorState::default();
     t.ingest(ms(0), SensorEvent::Heading { cw_deg: 1.0 });
     t.estimate_imu_drift(ms(0), &off, false);
@@ -44,7 +45,7 @@ fn feed(s: &mut SensorState, cfg: &CartoConfig, at: Instant, yaw_deg: f64, wheel
 
 #[test]
 fn the_smoothed_yaw_averages_the_imu_noise_and_follows_the_wheels_at_once() {
-    let cfg = CartoConfig { imu_drift_tau_s: 0.0, ..CartoConfig::default() };
+    let cfg = without_drift();
     let mut s = SensorState::default();
     // 3 s at rest, 50 Hz: the IMU jitters ±0.2°, the wheels stand still. The filter starts
     // from the first sample (+0.2°), which has decayed after 2.4 s; what is left is the
@@ -65,7 +66,8 @@ fn the_smoothed_yaw_averages_the_imu_noise_and_follows_the_wheels_at_once() {
     let y = s.yaw_deg().unwrap().value;
     assert!((y - turned.to_degrees()).abs() < 0.05, "smoothed {y:.3}, turned {:.3}", turned.to_degrees());
     // off: the raw IMU
-    let raw = CartoConfig { imu_smoothing_tau_s: 0.0, ..cfg };
+    let mut raw = cfg.clone();
+    raw.imu.smoothing = None;
     feed(&mut s, &raw, ms(3020), 1.0, wheel, false);
     assert!((s.yaw_deg().unwrap().value - 1.0).abs() < 1e-9);
 }
@@ -76,7 +78,7 @@ fn wheel_deg_to_counts(cfg: &CartoConfig, deg: f64) -> i32 {
 
 #[test]
 fn the_smoothed_yaw_restarts_from_the_imu_on_a_slip_and_while_turning() {
-    let cfg = CartoConfig { imu_drift_tau_s: 0.0, ..CartoConfig::default() };
+    let cfg = without_drift();
     let mut s = SensorState::default();
     for k in 0..50u64 {
         feed(&mut s, &cfg, ms(20 * k), 0.0, 0.0, false);
@@ -236,7 +238,7 @@ fn fresh_telemetry_wins_over_encoder_differences() {
     let mut s = encoders_at_zero();
     s.ingest(ms(50), SensorEvent::WheelRpm { rpm: [60.0; 4] });
     let rate = s.wheel_rate_cps(0, ms(100), &cfg);
-    assert!((rate - cfg.encoder_counts_per_wheel_rev).abs() < 1e-6);
+    assert!((rate - cfg.chassis.encoder_counts_per_wheel_rev).abs() < 1e-6);
     // stale telemetry is ignored
     assert_eq!(s.wheel_rate_cps(0, ms(1000), &cfg), 0.0);
     // pure rotation: FR/RR forward, FL/RL backward → counter-clockwise
@@ -250,7 +252,7 @@ fn telemetry_faster_than_the_motors_can_turn_is_not_used() {
     // and carried the odometry 75 m back in one extrapolation
     let cfg = CartoConfig::default();
     let mut s = encoders_at_zero();
-    let top = cfg.max_wheel_rpm as f32;
+    let top = cfg.chassis.max_wheel_rpm as f32;
     s.ingest(ms(50), SensorEvent::WheelRpm { rpm: [60.0, 60.0, -1.0e6, 60.0] });
     assert_eq!(s.wheel_rate_cps(0, ms(100), &cfg), 0.0, "the encoders' rate (none yet) is used");
     assert_eq!(s.yaw_rate_dps(ms(100), &cfg), 0.0);
@@ -297,4 +299,11 @@ fn silent_board_from_the_start_is_lost_after_the_timeout() {
     let mut k = KeepState::new(Duration::from_millis(500), Duration::from_millis(1500));
     assert_eq!(k.poll(ms(100)).1, None);
     assert_eq!(k.poll(ms(1600)).1, Some(PeerEvent::Lost));
+}
+
+/// The default configuration without the IMU drift estimate.
+fn without_drift() -> CartoConfig {
+    let mut cfg = CartoConfig::default();
+    cfg.imu.drift = None;
+    cfg
 }

@@ -257,7 +257,7 @@ impl FakeRobot {
         if now >= self.next[TELE] {
             self.next[TELE] += Duration::from_millis(50);
             if self.send_telemetry {
-                let max = self.cfg.max_wheel_rpm;
+                let max = self.cfg.chassis.max_wheel_rpm;
                 let rpm = self.wheel_pct.map(|p| (p / 100.0 * max) as f32);
                 let power = self.wheel_pct.map(|p| p as f32);
                 motor.extend(MotorPacket::Telemetry(Telemetry::motor(rpm, power)).to_bytes());
@@ -309,12 +309,17 @@ pub struct Harness {
 /// moves, which is what a stalled FORWARD looks like. The stall tests turn it on and move the
 /// range with the body.
 pub fn test_config() -> CartoConfig {
-    CartoConfig {
-        cell_size_m: 0.30,
-        obstacle_threshold_cm: 30.0,
-        stall_watch: false,
-        ..CartoConfig::default()
-    }
+    let mut cfg = CartoConfig { cell_size_m: 0.30, ..CartoConfig::default() };
+    cfg.safety.obstacle_threshold_cm = 30.0;
+    cfg.safety.stall_watch = false;
+    cfg
+}
+
+/// [`test_config`] changed by `change`.
+pub fn test_config_with(change: impl FnOnce(&mut CartoConfig)) -> CartoConfig {
+    let mut cfg = test_config();
+    change(&mut cfg);
+    cfg
 }
 
 impl Harness {
@@ -324,8 +329,8 @@ impl Harness {
 
     /// `cfg` with the line-latency correction off: the fake boards deliver instantly.
     pub fn with_config(mut cfg: CartoConfig) -> Self {
-        cfg.motor_baud = 0;
-        cfg.sensor_baud = 0;
+        cfg.boards.motor_baud = 0;
+        cfg.boards.sensor_baud = 0;
         let mut h = Harness {
             carto: Carto::new(cfg.clone()),
             robot: FakeRobot::new(cfg),

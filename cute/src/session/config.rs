@@ -117,7 +117,7 @@ pub struct CuteConfig {
     /// may be six motions before its MOVE_DONE (facing the grid heading again after a cut
     /// rotation, a shift clear of an echo, the turn, and either the turn back when it fails or,
     /// made off the centre, the look past it, the look back and the drive back to the centre),
-    /// each ended by Carto's own 8 s limit (`CartoConfig::move_timeout`). With 5 s, a shift and a
+    /// each ended by Carto's own 8 s limit (`CartoConfig.motion.move_timeout`). With 5 s, a shift and a
     /// turn whose settle nudges repeat over a slow, lossy motor link ran out while Carto was
     /// still within its limits, and Cute stopped a mapping that would have finished.
     pub move_timeout: Duration,

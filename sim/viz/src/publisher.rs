@@ -122,8 +122,8 @@ fn wire_config(loaded: &RunSetup, decode_board_writes: bool) -> WireConfig {
     let carto = CartoConfig::from_profile(&loaded.profile);
     WireConfig {
         board_checksum: ChecksumPolicy::from(loaded.profile.motor_board.accept_checksum),
-        carto_checksum: carto.motor_checksum,
-        max_frame: carto.max_frame,
+        carto_checksum: carto.boards.motor_checksum,
+        max_frame: carto.client.max_frame,
         decode_board_writes,
     }
 }

@@ -184,7 +184,7 @@ fn right_turns_the_physical_heading_by_minus_90_degrees() {
     rig.run_until(&mut c, 10.0, |r| r.contains(&GuiMessage::MoveDone));
     assert_eq!(c.received, vec![GuiMessage::MoveDone]);
     // after a mapping turn's MOVE_DONE the robot looks 20° past the new heading and back
-    // (`CartoConfig::look_past_turn_deg`): about 1.5 s
+    // (`CartoConfig.safety.look_past_turn_deg`): about 1.5 s
     rig.run(3.0);
     let turned = (rig.pose().theta - before).to_degrees();
     assert!((turned + 90.0).abs() <= 2.0, "turned {turned:.2} deg");

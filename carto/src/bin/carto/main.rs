@@ -303,14 +303,14 @@ impl Daemon {
                 bail!("--cell {cell}: a cell is between 0.05 and 5 metres");
             }
             cfg.cell_size_m = cell;
-            cfg.obstacle_threshold_cm = (cell * 100.0) as f32;
+            cfg.safety.obstacle_threshold_cm = (cell * 100.0) as f32;
         }
         if !(args.scan_deg.is_finite() && (0.0..=60.0).contains(&args.scan_deg)) {
             bail!("--scan-deg {}: between 0 and 60 degrees", args.scan_deg);
         }
-        cfg.scan_deg = args.scan_deg;
-        cfg.client_idle_limit = seconds("client-idle-limit", args.client_idle_limit)?;
-        cfg.client_dead_after = seconds("client-dead-after", args.client_dead_after)?;
+        cfg.safety.scan_deg = (args.scan_deg > 0.0).then_some(args.scan_deg);
+        cfg.client.idle_limit = seconds("client-idle-limit", args.client_idle_limit)?;
+        cfg.client.dead_after = seconds("client-dead-after", args.client_dead_after)?;
         let board = |which: &'static str, port: Option<String>, baud: u32| -> Result<Board> {
             Ok(Board {
                 which,
@@ -320,7 +320,7 @@ impl Daemon {
                     None => default_port(args.transport, which)?,
                 },
                 baud,
-                backoff: Backoff::new(cfg.board_retry_initial, cfg.board_retry_max),
+                backoff: Backoff::new(cfg.boards.retry_initial, cfg.boards.retry_max),
                 down_logged: false,
             })
         };
@@ -355,14 +355,14 @@ impl Daemon {
         let mut listener = TcpListenerLink::bind(args.listen.as_str())
             .with_context(|| format!("cannot listen on {}", args.listen))?;
         listener.set_keepalive(
-            cfg.client_dead_after.map(|d| KeepAlive::within(StdDuration::from_micros(d.total_micros()))),
+            cfg.client.dead_after.map(|d| KeepAlive::within(StdDuration::from_micros(d.total_micros()))),
         );
         tracing::info!(
             listen = %listener.local_addr(),
             robot = %profile.name,
             cell_m = cfg.cell_size_m,
-            idle_limit_s = cfg.client_idle_limit.map(|d| d.as_secs_f64()),
-            dead_after_s = cfg.client_dead_after.map(|d| d.as_secs_f64()),
+            idle_limit_s = cfg.client.idle_limit.map(|d| d.as_secs_f64()),
+            dead_after_s = cfg.client.dead_after.map(|d| d.as_secs_f64()),
             "carto ready: waiting for Cute"
         );
         let listener = TracedListener::new(listener, record.as_ref().map(|r| (r.recorder.feed(), clock)));
@@ -506,7 +506,7 @@ impl Daemon {
                         board.down_logged = true;
                         tracing::warn!(
                             board = board.which,
-                            max_wait_s = self.rt.carto().config().board_retry_max.as_secs_f64(),
+                            max_wait_s = self.rt.carto().config().boards.retry_max.as_secs_f64(),
                             "{e:#}: retrying with back-off"
                         );
                     } else {

@@ -45,8 +45,8 @@ fn two_readings_one_cell_apart_say_how_far_the_robot_went() {
 /// readings' (noise and 1 cm steps).
 fn two_readings_gain(cells: f64) -> f64 {
     let cfg = CartoConfig::default();
-    let wheels = cells * (cfg.odometry_sigma_per_m * 0.45).powi(2);
-    let readings = 2.0 * (cfg.sonar_sigma_m.powi(2) + 0.01f64.powi(2) / 12.0);
+    let wheels = cells * (cfg.chassis.odometry_sigma_per_m * 0.45).powi(2);
+    let readings = 2.0 * (cfg.sonar.sigma_m.powi(2) + 0.01f64.powi(2) / 12.0);
     wheels / (wheels + readings)
 }
 
