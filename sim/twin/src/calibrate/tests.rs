@@ -1,4 +1,4 @@
-use super::fit::{PARAMS, fit};
+use super::fit::{PARAMS, fit, range_noise};
 use super::*;
 
 fn room() -> Scenario {
@@ -53,6 +53,7 @@ fn calibrate_recovers_a_hidden_robot_and_shrinks_the_gap() {
         let within =
             err <= 0.05 * truth.abs() || e.sigma.is_some_and(|s| err <= 3.0 * s) || e.sigma.is_none();
         println!("{}: {:.4} ± {:?} (truth {truth:.4}, base {:.4})", e.name, e.value, e.sigma, e.base);
+
         assert!(within, "{e:?}, truth {truth}");
     }
     // what the drive can tell is told: everything but the mass
@@ -95,4 +96,24 @@ fn uncertainties_print_with_three_significant_digits() {
     assert_eq!(significant(0.2887), "0.289");
     assert_eq!(significant(12.34), "12.3");
     assert_eq!(significant(1234.0), "1234");
+}
+
+#[test]
+fn the_sonar_noise_is_the_spread_within_still_periods_whatever_each_period_s_offset() {
+    // three still periods 5 s apart, ranges at 10 Hz alternating ±0.4 cm about each period's
+    // own offset (0, +0.3, −0.5 cm: a prediction a few millimetres off in pose)
+    let mut range = Vec::new();
+    for (k, offset) in [0.0, 0.3, -0.5].into_iter().enumerate() {
+        for i in 0..20 {
+            let e = if i % 2 == 0 { 0.4 } else { -0.4 };
+            range.push((5.0 * k as f64 + 0.1 * i as f64, offset + e));
+        }
+    }
+    let noise = range_noise(&range, &RobotProfile::default());
+    // 60 ranges in 3 periods: Σ(e − ē)² = 60 × 0.16, over 57 degrees of freedom
+    let expected = (60.0 * 0.16 / 57.0f64).sqrt();
+    assert!((noise.value - expected).abs() < 1e-9, "{noise:?}");
+    assert!((noise.sigma.unwrap() - expected / 114.0f64.sqrt()).abs() < 1e-9);
+    // the RMS about zero would have read the offsets as noise
+    assert!(rms(&range) > 0.45);
 }
