@@ -8,8 +8,15 @@
 //!   the wheels and the gyro and correcting from sonar ranges against the grid.
 //! - [`localiser`]: Carto's belief: the filter run on the dead reckoning, corrected at every
 //!   reading at rest, and the grid those readings build.
+//! - [`odometry`]: dead reckoning of the offset from the current cell's centre.
+//! - [`surroundings`]: the echo points the safety checks ask, and known surface points.
+//! - [`walls`]: surfaces the sonar ranged straight ahead, which the localiser compares a
+//!   straight range with.
 
 pub mod grid;
 pub mod localiser;
+pub mod odometry;
 pub mod pose;
 pub mod sonar;
+pub mod surroundings;
+pub mod walls;

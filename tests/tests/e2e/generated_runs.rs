@@ -88,7 +88,7 @@ fn a_point_under_the_body_does_not_make_carto_refuse_every_turn() {
 /// grid, which the sonar does not hear; the body stops against it, pinned, while the wheels spin
 /// on. By the wheels Carto drove four cells north and told Cute so, and the run ended after 32 s
 /// with 7 % of the room mapped and Cute's robot 1.6 m from the real one. The sonar's range held
-/// while the wheels drove (`carto/src/pilot/stall.rs`): Carto now stops, reports the cell ahead as
+/// while the wheels drove (`carto/src/control/pilot/stall.rs`): Carto now stops, reports the cell ahead as
 /// blocked and drives back, and the room is mapped.
 #[test]
 fn a_forward_pinned_against_an_unseen_box_is_stopped_and_the_room_still_mapped() {

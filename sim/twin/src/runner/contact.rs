@@ -10,8 +10,8 @@ use crate::oracle::to_carto_frame;
 use crate::report::{ContactCause, FirstContact, HEARD_NEAR_M, Heard};
 
 impl Lockstep {
-    /// A debug line when Carto stops a FORWARD as stalled (`carto/src/pilot/stall.rs`) or pushed
-    /// (`carto/src/pilot.rs`, "Pushed"): where the robot really is, how far from it Carto's
+    /// A debug line when Carto stops a FORWARD as stalled (`carto/src/control/pilot/stall.rs`) or pushed
+    /// (`carto/src/control/pilot.rs`, "Pushed"): where the robot really is, how far from it Carto's
     /// belief now lies, and how many collisions the run has had so far (a push stop whose count
     /// did not rise since the FORWARD began, nor in the seconds before it, touched nothing).
     pub(super) fn note_stop(&self, now: Instant, what: &str) {
