@@ -382,12 +382,10 @@ const SAME_REST_S: f64 = 0.3;
 /// predicted): their spread about each still period's own mean, pooled over the periods, with
 /// its standard error `σ/√(2(n − k))` for `n` ranges in `k` periods.
 ///
-/// Each period's mean is left out because a pose a few millimetres off in the prediction moves
-/// every residual of that period alike: the link's timing differs between the recording and
-/// the replay (a loaded machine delays Carto's commands by a step or two), and the RMS about
-/// zero read that bias as noise (a hidden 0.39 cm came out 0.46 ± 0.02 cm under load, while the
-/// spread within the periods of the same drive is 0.353–0.358 cm, loaded or not). Periods of one range
-/// say nothing.
+/// Each period's mean is left out because a pose the replay has a few millimetres off (the
+/// link's timing differs between the recording and the replay, more so on a loaded machine)
+/// moves every residual of that period alike: the RMS about zero would count that bias as
+/// noise. Periods of one range say nothing.
 pub fn range_noise(range: &[(f64, f64)], base: &RobotProfile) -> Estimate {
     let mut periods: Vec<Vec<f64>> = Vec::new();
     let mut last_t = f64::NEG_INFINITY;
