@@ -5,7 +5,7 @@
 //! short message; [`super::source::parse`] puts the value's path in front (`obstacles[2].radius:
 //! must be a positive number of metres`) and its line and column. The scenario's types stay
 //! plain numbers. Checks that need two values or the robot profile are in
-//! [`super::RunSetup`].
+//! [`crate::setup::RunSetup`].
 
 use rapier2d::parry::math::Vector;
 use rapier2d::parry::shape::ConvexPolygon;
