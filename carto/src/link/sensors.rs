@@ -233,9 +233,9 @@ impl SensorState {
     /// the yaw, and the IMU pulls the prediction with time constant
     /// [`ImuSmoothing::tau_s`](crate::config::ImuSmoothing::tau_s) (no smoothing: `None`). The wheels' heading is smooth but slips;
     /// the IMU's does not slip but carries white noise (the profile's 0.2°). Without smoothing
-    /// that noise drives the heading hold, and in the twin the wheels' heading then wandered by
-    /// up to 1.2° over a 37-minute mission (0.25° with a noiseless IMU); the drift estimate,
-    /// which follows the wheels, took it for drift. The filter restarts from the raw IMU while
+    /// that noise drives the heading hold, the wheels' heading wanders with it, and the drift
+    /// estimate, which follows the wheels, takes that for drift (measured:
+    /// `docs/journal/real-rooms.md`). The filter restarts from the raw IMU while
     /// `turning` (a turn or a look runs, or ended less than [`crate::motor::SETTLE_AFTER_TURN`]
     /// ago: the wheels slip most then) and when the IMU disagrees with the prediction by
     /// more than [`ImuSmoothing::reset_deg`](crate::config::ImuSmoothing::reset_deg) (a slip, a collision).
