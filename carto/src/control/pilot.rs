@@ -28,7 +28,7 @@
 //!   the next FORWARD's reply that the turn was not made). A reconnect whose re-sent pose takes
 //!   that turn as made defeats this: the stored heading then follows Cute (a known limit).
 //! - The bumper, pressed while a FORWARD runs, stops it: `SET_OBSTACLE_POSITION(cell ahead)`, the
-//!   rest is aborted, and (by default) the robot drives back to the cell it started from before
+//!   rest is aborted, and the robot drives back to the cell it started from before
 //!   `MOVE_DONE`. Pressed at the obstacle check, it counts as an obstacle.
 //! - A FORWARD whose sonar range holds while the wheels drive is stalled (`pilot/stall.rs`,
 //!   [`Safety::stall_watch`](crate::config::Safety::stall_watch)): it is stopped, the odometry takes the sonar's word, and it
@@ -545,7 +545,7 @@ impl Pilot {
 
     /// Ends a FORWARD stopped short (the bumper, a stall, a push): the echoes heard while it
     /// drove are forgotten (placed from odometry that did not see what stopped it), the cell
-    /// ahead is reported blocked, and the robot drives back (by default) before `MOVE_DONE`.
+    /// ahead is reported blocked, and the robot drives back before `MOVE_DONE`.
     fn end_stopped_forward(&mut self, io: &mut Io<'_>) {
         self.echoes.forget_moving();
         self.place.touched();

@@ -23,8 +23,7 @@ fn imu_drift_at_rest_is_learnt_from_the_wheels_and_removed() {
     assert!((s.imu_drift_deg() - raw).abs() < 0.03, "estimate {:.3}", s.imu_drift_deg());
     assert!(s.yaw_deg().unwrap().value.abs() < 0.03, "corrected yaw {:.3}", s.yaw_deg().unwrap().value);
     // off: the raw heading stays
-    let mut off = cfg.clone();
-    off.imu.drift = None;
+    let off = without_drift();
     let mut t = SensorState::default();
     t.ingest(ms(0), SensorEvent::Heading { cw_deg: 1.0 });
     t.estimate_imu_drift(ms(0), &off, false);
