@@ -79,6 +79,8 @@ pub struct CartoStats {
     pub corridor_blocked: u64,
     /// FORWARDs driven on a track beside the line through the centres, clear of a known echo.
     pub forwards_aside: u64,
+    /// FORWARDs driven by a sliding way through their two cells (`control/pilot/sliding.rs`).
+    pub forwards_slid: u64,
     /// Turns that drove back or forth first to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
@@ -554,5 +556,14 @@ impl Carto {
     /// twin's analyses `--known-room` and `--known-echoes`).
     pub fn add_known_surfaces(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
         self.pilot.add_known_surfaces(points);
+    }
+
+    /// Gives Carto the room's floor plan: every surface in it, as points in the grid's metric
+    /// frame ([`Carto::add_known_surfaces`]). A complete plan says that space without a point is
+    /// free, so a FORWARD may slide through any of it (`control/pilot/sliding.rs`); without one,
+    /// only the space the evidence grid knows free.
+    pub fn add_floor_plan(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
+        self.pilot.add_known_surfaces(points);
+        self.pilot.know_free_space();
     }
 }

@@ -9,7 +9,7 @@ pub mod fuzzing;
 pub mod link;
 
 // The parts under their short names: the folders show the design, the paths stay as they were.
-pub use control::{calibration, motor, pilot, ultrasound};
+pub use control::{calibration, motor, pilot, slide, ultrasound};
 pub use estimate::{odometry, surroundings, walls};
 pub use link::{backoff, ratelimit, recording, runtime, sensors, wire};
 

@@ -165,6 +165,72 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
 }
 
 #[test]
+fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
+    // cell (5, 5) facing east, 0.45 m cells: a known leg 16 cm ahead and 11 cm left of the
+    // centre line, 3 cm inside the 14 cm half corridor and 16 cm behind the body at the next
+    // centre (in 0.30 m cells it lies inside the body grown by the clearance there: refused, as
+    // the way is not clear)
+    let cells_45 = || {
+        fake::test_config_with(|c| {
+            c.cell_size_m = 0.45;
+            c.safety.obstacle_threshold_cm = 45.0;
+        })
+    };
+    let mut h = ready_with(cells_45());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
+    h.send(cartography(Command::Forward));
+    let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
+    for _ in 0..30_000 {
+        h.tick();
+        rightmost = rightmost.min(h.robot.y);
+        // beside the leg, the gap between the body's left flank and it
+        if (h.robot.x - 0.16).abs() <= 0.13 {
+            closest = closest.min(0.11 - (h.robot.y + 0.12));
+        }
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    let stats = h.carto.stats();
+    assert_eq!((stats.forwards_slid, stats.corridor_blocked), (1, 0));
+    // slid right, passed the leg keeping (nearly) the clearance, and ended near the line at the
+    // next centre
+    assert!(rightmost <= -0.025, "slid only {rightmost:.3} m right");
+    assert!(closest >= 0.01, "the body's flank passed {closest:.3} m from the leg");
+    assert!((h.robot.x - 0.45).abs() <= 0.015, "drove {:.3} m", h.robot.x);
+    assert!(h.robot.y.abs() <= 0.02, "ended {:.4} m left of the line", h.robot.y);
+    // control, 0.30 m cells: the leg lies in the clearance of the body at the next centre
+    let mut h = ready_with(fake::test_config());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_floor_plan([(5.0 * 0.30 + 0.16, -5.0 * 0.30 + 0.11)]);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
+    assert_eq!(h.carto.stats().forwards_slid, 0);
+    assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
+    // control, 0.45 m cells, the leg known but no floor plan and nothing heard beside the line:
+    // the space the slide would cross is not known free
+    let mut h = ready_with(cells_45());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_known_surfaces([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
+    assert_eq!(h.carto.stats().forwards_slid, 0);
+}
+
+const WAY_EAST_NOT_CLEAR: [GuiMessage; 3] = [
+    GuiMessage::SetObstaclePosition { x: 5, y: 6 },
+    GuiMessage::SetRobotPosition { x: 5, y: 5 },
+    GuiMessage::MoveDone,
+];
+
+#[test]
 fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
     // cell (5, 5) facing east, 0.30 m cells: a known point 25 cm ahead and 13.5 cm left of the
     // centre line, 5 mm inside the 14 cm half corridor (body 12 cm and 2 cm of clearance)

@@ -84,6 +84,7 @@ impl Carto {
             bumps: p.bumps,
             corridor_blocked: p.corridor_blocked,
             forwards_aside: p.forwards_aside,
+            forwards_slid: p.forwards_slid,
             turns_shifted: p.turns_shifted,
             turns_recentred: p.turns_recentred,
             turns_refused: p.turns_refused,

@@ -47,10 +47,11 @@
 //! board link ([`Pilot::on_link_lost`]) drops it;
 //! the stored pose changes only by `SEND_ROBOT_POSITION` or a completed move.
 //!
-//! Parts: the [`Pilot`] owns four components, each with its own state and methods, none reaching
+//! Parts: the [`Pilot`] owns five components, each with its own state and methods, none reaching
 //! into another's: `tasks.rs` (the task queue and the partial batch), `localisation.rs` (the
-//! stored pose and the belief around it), `echoes.rs` (the echo points the safety checks ask) and
-//! `forward.rs` (the watches of a running FORWARD). The pilot itself holds the stage machine
+//! stored pose and the belief around it), `echoes.rs` (the echo points the safety checks ask),
+//! `forward.rs` (the watches of a running FORWARD) and `sliding.rs` (local motion: the legs of
+//! a sliding way, and whether free space is known). The pilot itself holds the stage machine
 //! (`stage.rs`) and sequences the parts: requests and link events (`session.rs`), starting a
 //! command (`commands.rs`), the scan, corridor and turn checks (`safety.rs`). Every step of a
 //! poll takes one [`Io`]: the time, the motor and the readings.
@@ -89,6 +90,7 @@ mod limits;
 mod localisation;
 mod safety;
 mod session;
+mod sliding;
 mod stage;
 mod stall;
 mod tasks;
@@ -97,6 +99,7 @@ use echoes::Echoes;
 use forward::ForwardWatch;
 use limits::Safety;
 use localisation::Localisation;
+use sliding::Sliding;
 use stall::Stall;
 use tasks::{Next, Tasks};
 
@@ -119,6 +122,8 @@ pub struct Pilot {
     echoes: Echoes,
     /// The watches of the running FORWARD.
     forward: ForwardWatch,
+    /// The sliding way of the running FORWARD.
+    sliding: Sliding,
     stage: Stage,
     rest_since: Instant,
     /// A reading of the running scan never came.
@@ -147,6 +152,7 @@ impl Pilot {
             place: Localisation::new(cfg),
             echoes: Echoes::new(safety),
             forward: ForwardWatch::new(cfg),
+            sliding: Sliding::default(),
             stage: Stage::Next,
             rest_since: Instant::ZERO,
             scan_missing: false,
@@ -194,6 +200,9 @@ impl Pilot {
             Stage::Looking { .. } => Activity::ScanLook,
             Stage::Reading { .. } => Activity::ScanReading,
             Stage::Shifting { .. } => Activity::ShiftingBeforeTurn,
+            // the legs of a sliding way are parts of its FORWARD, or shift before a turn
+            Stage::Sliding { turn: None, .. } => Activity::DrivingForward,
+            Stage::Sliding { turn: Some(_), .. } => Activity::ShiftingBeforeTurn,
             Stage::TurningBack { .. } => Activity::TurningBack,
             Stage::LookingPast { .. } => Activity::LookingPastTurn,
             Stage::Recentring { .. } => Activity::Recentring,
@@ -394,6 +403,11 @@ impl Pilot {
                 },
                 Stage::Reading { look, since } => {
                     if !self.scan_reading(io, look, since) {
+                        return;
+                    }
+                }
+                Stage::Sliding { since, turn } => {
+                    if !self.poll_slide(io, since, turn) {
                         return;
                     }
                 }

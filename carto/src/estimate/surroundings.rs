@@ -207,6 +207,16 @@ impl Surroundings {
         self.points.iter().map(|e| e.at)
     }
 
+    /// Every point, the floor plan's too, as `(along, left)` from `frame`, with `along` in
+    /// `along_m` and `left` in `left_m` (both inclusive ranges, smaller bound first).
+    pub fn in_box(&self, frame: Pose2, along_m: (f64, f64), left_m: (f64, f64)) -> Vec<(f64, f64)> {
+        let local = frame.localiser();
+        self.all()
+            .map(|&p| local(p))
+            .filter(|&(a, l)| (along_m.0..=along_m.1).contains(&a) && (left_m.0..=left_m.1).contains(&l))
+            .collect()
+    }
+
     /// Echo points kept (the floor plan's not counted).
     pub fn len(&self) -> usize {
         self.points.len()

@@ -5,7 +5,8 @@
 //! Carto learns the room only through one forward sonar. To tell what fails because of what the
 //! sonar cannot see from what fails for any other reason (planning, margins, localisation),
 //! `explobot run --known-room` and `explobot sweep --known-room` give Carto every surface of the
-//! room before the run ([`carto::Carto::add_known_surfaces`]): points every
+//! room before the run ([`carto::Carto::add_floor_plan`]: a complete plan, so space without a
+//! point is known free and Carto's local motion may slide through it): points every
 //! [`SPACING_M`] along the room's walls and every obstacle's outline, in the grid's metric frame
 //! (x east, y north, cell (0, 0)'s centre at the origin). Carto's safety checks then treat them
 //! as echoes that are never cleared. Such a run is an analysis, a ceiling for perfect

@@ -194,7 +194,7 @@ impl Lockstep {
         match loaded.oracle() {
             Oracle::Room => {
                 let points = crate::oracle::surface_points(scenario, &truth.frame, crate::oracle::SPACING_M);
-                carto.carto_mut().add_known_surfaces(points);
+                carto.carto_mut().add_floor_plan(points);
             }
             Oracle::Echoes => twin.body_mut().collect_new_heard(),
             Oracle::None => {}

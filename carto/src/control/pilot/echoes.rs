@@ -150,6 +150,23 @@ impl Echoes {
         points.first_in_strip(robot, (-self.safety.half_length_m, to_m), beside)
     }
 
+    /// Every point held, heard at rest, moving (unless `at_rest_only`) or known beforehand, as
+    /// `(along, left)` from `frame`, within `along_m` and `left_m` of it (inclusive ranges,
+    /// smaller bound first).
+    pub(super) fn in_box(
+        &self,
+        frame: Pose2,
+        along_m: (f64, f64),
+        left_m: (f64, f64),
+        at_rest_only: bool,
+    ) -> Vec<(f64, f64)> {
+        let mut points = self.at_rest.in_box(frame, along_m, left_m);
+        if !at_rest_only {
+            points.extend(self.moving.in_box(frame, along_m, left_m));
+        }
+        points
+    }
+
     /// Keeps the echo heard moving at `at` (ahead, left of `robot`) from now on as if heard at
     /// rest: it refused a FORWARD, so the turn that may follow keeps clear of it too.
     pub(super) fn keep_as_at_rest(&mut self, robot: Pose2, at: (f64, f64)) {

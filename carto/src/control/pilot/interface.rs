@@ -112,6 +112,8 @@ pub struct PilotCounters {
     /// FORWARDs driven on a track beside the line through the centres, clear of an echo
     /// (`pilot/safety.rs`, "Corridor").
     pub forwards_aside: u64,
+    /// FORWARDs driven by a sliding way through their two cells (`pilot/sliding.rs`).
+    pub forwards_slid: u64,
     /// Turns that first drove back or forth to clear a known echo.
     pub turns_shifted: u64,
     /// Turns made off the centre that drove back to it before their `MOVE_DONE`.

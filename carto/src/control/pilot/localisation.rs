@@ -72,6 +72,16 @@ impl Localisation {
         self.pose
     }
 
+    /// The stored cell's centre, facing the stored grid heading, in the grid's metric frame.
+    pub(super) fn cell_frame(&self) -> Option<Pose2> {
+        let GridPose { x: row, y: col, heading } = self.pose?;
+        Some(Pose2 {
+            x: f64::from(col) * self.cell_m,
+            y: -f64::from(row) * self.cell_m,
+            yaw_deg: heading_deg(heading),
+        })
+    }
+
     /// The localiser: its grid and its filter.
     pub(super) fn localiser(&self) -> &Localiser {
         &self.localiser

@@ -21,7 +21,9 @@
 //!   The reason: a passage that leaves the body less than the clearance at the centre, but
 //!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
 //!   the robot that came through it one way was refused the way back, a trap Cute could not
-//!   leave. When no track clears, the answer says what the point is evidence of. A point inside
+//!   leave. When no track clears, the FORWARD may go by a sliding way through its two cells over
+//!   what is known free (`pilot/sliding.rs`, [`crate::slide`]). When none exists either, the
+//!   answer says what the point is evidence of. A point inside
 //!   the body standing at the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`,
 //!   as for a close straight echo. A point anywhere else in the corridor (on the way, or within
 //!   the clearance beside the body) says only that the way is not clear:
@@ -31,7 +33,9 @@
 //!   body's rectangle where Carto believes it stands are forgotten, the echoes heard moving
 //!   (below) too ([`crate::surroundings::Surroundings::clear_footprint`]).
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
-//!   its diagonal plus the clearance). Otherwise Carto first drives back or forth along its
+//!   its diagonal plus the clearance). Otherwise, with a complete floor plan, the body slides in
+//!   its cell to the nearest place where the circle clears (`pilot/sliding.rs`); without one,
+//!   Carto first drives back or forth along its
 //!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
 //!   most a quarter cell) after which the circle is clear. "Its heading" is the heading of the
 //!   last FORWARD, not the one the body faces: back along it is the way the body came (space it
@@ -432,6 +436,9 @@ impl Pilot {
                         track_left_m = track;
                     }
                     None => {
+                        if let Some(way) = self.slide_way(io) {
+                            return self.start_slide(io, way);
+                        }
                         if hit.heard_moving {
                             // what refused this FORWARD, the turn that may follow keeps clear of
                             // too ("Kept while they hold")
@@ -490,6 +497,20 @@ impl Pilot {
         let Some(hit) = self.echoes.in_turning_circle(robot) else {
             return self.start_turn(io, mv);
         };
+        if self.free_space_known() {
+            return match self.turn_place(io) {
+                Some(legs) => self.slide_to_turn(io, mv, legs),
+                None => {
+                    self.counters.turns_refused += 1;
+                    let why = format!(
+                        "turn refused: an echo {:.0} cm ahead and {:.0} cm left lies in the turning circle and no place in the cell clears it",
+                        hit.0 * 100.0,
+                        hit.1 * 100.0
+                    );
+                    self.fail(io.now, &why)
+                }
+            };
+        }
         let max_m = 0.25 * s.cell_m;
         // searched in the frame of the last FORWARD's heading: behind is the way the body came
         // (swept), ahead the way it ranged; after a turn on the spot, behind the new heading is

@@ -23,6 +23,9 @@ pub(super) enum Stage {
     Looking { look: usize },
     /// Waiting for a distance reading at rest after look number `look`.
     Reading { look: usize, since: Instant },
+    /// A leg of a sliding way (`pilot/sliding.rs`) started at `since`: of a FORWARD, or to where
+    /// the turn `turn` can be made.
+    Sliding { since: Instant, turn: Option<Move> },
     /// Driving back or forth before the turn `mv`, so the turning body clears known echoes.
     Shifting { mv: Move },
     /// The turn `mv` failed: turning back to the heading it started from.

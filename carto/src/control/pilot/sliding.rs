@@ -1,0 +1,178 @@
+//! Local motion ([`crate::slide`]): a FORWARD by a sliding way through its two cells when the
+//! straight way and the tracks beside it are blocked (`pilot/safety.rs`, "Corridor"), and, with
+//! a complete floor plan, a turn made where in its cell the turning circle clears.
+//!
+//! - **What may be crossed.** Every point held (heard at rest, heard moving, a floor plan) must
+//!   stay out of the body grown by the clearance, all along the way. Beyond the band of tracks a
+//!   straight FORWARD may take, the space the body adds must be known free: with a complete floor
+//!   plan ([`crate::Carto::add_floor_plan`]) all space without a point is; without one, only the
+//!   cells of the localiser's evidence grid that readings and the body's footprint made free. An
+//!   echo point stands for a surface anywhere across the cone, and beside it lies space no
+//!   reading covered (`docs/journal/world-model.md`, round 10): the grid is what tells the two
+//!   apart.
+//! - **Turns.** With a complete floor plan, a turn whose circle holds a point slides first to
+//!   the nearest place in its cell where the circle clears, over the same lattice (the points
+//!   heard at rest and the plan's: the turn check's); without one, the shift along the last
+//!   FORWARD's heading of `pilot/safety.rs` ("Turns") stays.
+//! - **How it is driven.** Each leg is a shift at rest, holding the heading
+//!   ([`crate::motor::Motor::start_shift`]), aimed at its point from where the odometry says the
+//!   body is now, so errors do not add up from leg to leg; a FORWARD's last leg is the
+//!   cartography FORWARD on its track ([`crate::motor::Motor::start_next_cell_on`]), with every
+//!   watch of a FORWARD. The bumper pressed during a FORWARD's leg ends the FORWARD as a bump
+//!   during it does; during a leg before a turn, it ends the turn as failed.
+//! - **What Cute hears.** Nothing new: a FORWARD made, or refused as before; a turn made or not.
+
+use std::collections::VecDeque;
+
+use robot_model::grid::Move;
+use robot_model::time::Instant;
+
+use super::{Io, Pilot, Stage};
+use crate::estimate::grid::Occupancy;
+use crate::slide::{self, SlideGeometry};
+use crate::surroundings::Pose2;
+
+/// The sliding way of the running command, and what the pilot knows of free space.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Sliding {
+    /// A complete floor plan was given: space without a point is free.
+    free_space_known: bool,
+    /// The points still to slide to, from the stored cell's centre.
+    legs: VecDeque<(f64, f64)>,
+    /// The track of a FORWARD's last leg, left of the line through the centres.
+    track_left_m: f64,
+}
+
+impl Pilot {
+    /// The floor plan given is complete ([`crate::Carto::add_floor_plan`]).
+    pub fn know_free_space(&mut self) {
+        self.sliding.free_space_known = true;
+    }
+
+    /// Whether a complete floor plan was given.
+    pub(super) fn free_space_known(&self) -> bool {
+        self.sliding.free_space_known
+    }
+
+    fn slide_geometry(&self) -> SlideGeometry {
+        let s = self.safety;
+        SlideGeometry {
+            cell_m: s.cell_m,
+            half_length_m: s.half_length_m,
+            half_width_m: s.half_width_m,
+            clearance_m: s.clearance_m,
+            band_m: s.aside_max_m,
+            turn_clear_m: s.turn_clear_m,
+        }
+    }
+
+    /// Plans with `plan` from where the robot believes it stands in its stored cell, over the
+    /// points within reach of cells A and B (only those heard at rest and the plan's with
+    /// `at_rest_only`), and what is known free.
+    fn plan_slide<T>(
+        &self,
+        io: &Io<'_>,
+        at_rest_only: bool,
+        plan: impl Fn(
+            &SlideGeometry,
+            (f64, f64),
+            &[(f64, f64)],
+            &dyn Fn((f64, f64), (f64, f64)) -> bool,
+        ) -> Option<T>,
+    ) -> Option<T> {
+        let s = self.safety;
+        let frame = self.place.cell_frame()?;
+        let off = io.motor.odometry().offset();
+        let reach = s.turn_clear_m.max(s.half_length_m.hypot(s.half_width_m) + s.clearance_m);
+        let along = (-0.5 * s.cell_m - reach, 1.5 * s.cell_m + reach);
+        let left = (-0.5 * s.cell_m - reach, 0.5 * s.cell_m + reach);
+        let points = self.echoes.in_box(frame, along, left, at_rest_only);
+        let grid = self.place.localiser().grid();
+        let free_space_known = self.sliding.free_space_known;
+        let known_free = |along: (f64, f64), left: (f64, f64)| {
+            free_space_known || {
+                let (x, y) = frame.offset(0.0, 0.5 * (left.0 + left.1));
+                let strip = Pose2 { x, y, ..frame };
+                grid.classify_rect(strip, along.0, along.1, 0.5 * (left.1 - left.0)) == Occupancy::Free
+            }
+        };
+        plan(&self.slide_geometry(), (off.along_m, off.left_m), &points, &known_free)
+    }
+
+    /// A sliding way for the FORWARD from where the robot believes it stands, or `None`.
+    pub(super) fn slide_way(&self, io: &Io<'_>) -> Option<slide::Slide> {
+        self.plan_slide(io, false, slide::plan)
+    }
+
+    /// The legs to the nearest place in the cell where the turning circle clears, or `None`.
+    pub(super) fn turn_place(&self, io: &Io<'_>) -> Option<Vec<(f64, f64)>> {
+        self.plan_slide(io, true, slide::plan_turn)
+    }
+
+    /// Starts the sliding way `way` of a FORWARD.
+    pub(super) fn start_slide(&mut self, io: &mut Io<'_>, way: slide::Slide) {
+        tracing::info!(legs = ?way.legs, track_left_m = way.track_left_m, "FORWARD by a sliding way through its two cells");
+        self.counters.forwards_slid += 1;
+        self.sliding.legs = way.legs.into();
+        self.sliding.track_left_m = way.track_left_m;
+        self.next_leg(io, io.now, None);
+    }
+
+    /// Slides along `legs` to where the turn `mv` can be made, then turns.
+    pub(super) fn slide_to_turn(&mut self, io: &mut Io<'_>, mv: Move, legs: Vec<(f64, f64)>) {
+        tracing::info!(?legs, "turn: sliding to where its circle clears the known points first");
+        self.counters.turns_shifted += 1;
+        self.sliding.legs = legs.into();
+        self.next_leg(io, io.now, Some(mv));
+    }
+
+    /// The next leg of the sliding way: a shift to its point, or, after the last, the FORWARD on
+    /// its track or the turn `turn`.
+    fn next_leg(&mut self, io: &mut Io<'_>, since: Instant, turn: Option<Move>) {
+        let Some((along, left)) = self.sliding.legs.pop_front() else {
+            if let Some(mv) = turn {
+                return self.start_turn(io, mv);
+            }
+            self.forward.start(io, None);
+            return match io.motor.start_next_cell_on(io.now, self.sliding.track_left_m, io.sensors) {
+                Ok(_) => self.stage = Stage::Moving { kind: Move::Forward, since },
+                Err(e) => self.fail(io.now, &e.to_string()),
+            };
+        };
+        let off = io.motor.odometry().offset();
+        match io.motor.start_shift(io.now, along - off.along_m, left - off.left_m, io.sensors) {
+            Ok(()) => self.stage = Stage::Sliding { since, turn },
+            Err(e) => self.fail(io.now, &format!("a leg of a sliding way: {e}")),
+        }
+    }
+
+    /// Follows a leg of the sliding way that started at `since`, before the turn `turn` or else
+    /// a FORWARD; `false` while it runs.
+    pub(super) fn poll_slide(&mut self, io: &mut Io<'_>, since: Instant, turn: Option<Move>) -> bool {
+        if io.sensors.bumper_pressed_since(since) {
+            self.sliding.legs.clear();
+            match turn {
+                Some(_) => {
+                    io.motor.stop(io.now);
+                    self.place.touched();
+                    self.fail(io.now, "the bumper, sliding to where a turn can be made");
+                }
+                None => self.bumped(io),
+            }
+            return true;
+        }
+        match io.motor.take_outcome() {
+            None if io.motor.is_busy() => false,
+            None | Some(Ok(())) => {
+                self.next_leg(io, since, turn);
+                true
+            }
+            Some(Err(e)) => {
+                self.sliding.legs.clear();
+                self.echoes.forget_moving();
+                self.fail(io.now, &format!("a leg of a sliding way failed: {e}"));
+                true
+            }
+        }
+    }
+}
