@@ -1,7 +1,8 @@
 //! The cost of Carto's world model on this machine: one sonar update of the evidence grid (an
 //! echo near, at mid range and at the sonar's limit, and a reading with no echo), the shape
 //! queries the pilot asks before a move (the corridor of one FORWARD, the turning circle), and
-//! one step of the pose filter (a prediction, and a correction from a range against the grid).
+//! one step of the pose filter (a prediction, and a correction from a range against the grid),
+//! and the local planner's sliding way for a FORWARD past a chair leg and its place for a turn.
 //!
 //! Carto's control cycle is 60 ms and the Raspberry Pi 4 is about 5–8 times slower than a
 //! desktop core, so an update must stay well under a millisecond here.
@@ -80,5 +81,29 @@ fn filter_step(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, sonar_update, queries, filter_step);
+/// A FORWARD past a chair leg in its corridor (its outline every centimetre, a wall beside), and
+/// a turn whose circle holds the leg, over a complete floor plan.
+fn local_motion(c: &mut Criterion) {
+    let g = carto::slide::SlideGeometry::from_config(&carto::CartoConfig {
+        cell_size_m: 0.45,
+        ..Default::default()
+    });
+    let leg = (0..12)
+        .map(|k| f64::from(k) * std::f64::consts::TAU / 12.0)
+        .map(|t| (0.20 + 0.015 * t.cos(), 0.10 + 0.015 * t.sin()));
+    let wall = (-40..=100).map(|k| (f64::from(k) * 0.01, -0.33));
+    let points: Vec<(f64, f64)> = leg.chain(wall).collect();
+    let free = |_: (f64, f64), _: (f64, f64)| true;
+    assert!(carto::slide::plan(&g, (0.0, 0.0), &points, &free).is_some_and(|w| !w.legs.is_empty()));
+    let mut group = c.benchmark_group("local_motion");
+    group.bench_function("forward_slide", |b| {
+        b.iter(|| carto::slide::plan(&g, black_box((0.0, 0.0)), &points, &free))
+    });
+    group.bench_function("turn_place", |b| {
+        b.iter(|| carto::slide::plan_turn(&g, black_box((0.0, 0.0)), &points, &free))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, sonar_update, queries, filter_step, local_motion);
 criterion_main!(benches);

@@ -560,8 +560,8 @@ impl Carto {
 
     /// Gives Carto the room's floor plan: every surface in it, as points in the grid's metric
     /// frame ([`Carto::add_known_surfaces`]). A complete plan says that space without a point is
-    /// free, so a FORWARD may slide through any of it (`control/pilot/sliding.rs`); without one,
-    /// only the space the evidence grid knows free.
+    /// free, so a FORWARD may slide through any of it and a turn may slide to where its circle
+    /// clears (`control/pilot/sliding.rs`); without one, Carto does not slide.
     pub fn add_floor_plan(&mut self, points: impl IntoIterator<Item = (f64, f64)>) {
         self.pilot.add_known_surfaces(points);
         self.pilot.know_free_space();

@@ -15,7 +15,7 @@
 //! - A lattice point is clear when no point lies in the body's rectangle there grown by the
 //!   clearance, and, beyond the band of tracks a straight FORWARD may take, when the caller says
 //!   the space the body adds beside that band is known free (a complete floor plan says so of all
-//!   space without a point; an evidence grid of the cells it has evidence for).
+//!   space without a point; an evidence grid could, of the cells it holds free).
 //! - The body moves between neighbouring clear points (a diagonal step only when both steps
 //!   along the axes are clear too), so every position on the way keeps the clearance: a
 //!   rectangle moved by less than its size along one axis stays within the two rectangles at
@@ -59,6 +59,22 @@ pub struct SlideGeometry {
     pub band_m: f64,
     /// The radius of the circle the body sweeps turning on the spot, plus the clearance, metres.
     pub turn_clear_m: f64,
+}
+
+impl SlideGeometry {
+    /// The geometry of the robot `cfg` describes: its band is
+    /// [`Safety::stop_within_m`](crate::config::Safety::stop_within_m) less the lateral tolerance
+    /// a move ends within.
+    pub fn from_config(cfg: &crate::CartoConfig) -> SlideGeometry {
+        SlideGeometry {
+            cell_m: cfg.cell_size_m,
+            half_length_m: 0.5 * cfg.chassis.body_length_m,
+            half_width_m: 0.5 * cfg.chassis.body_width_m,
+            clearance_m: cfg.safety.clearance_m,
+            band_m: (cfg.safety.stop_within_m - cfg.motion.lateral_tolerance_m).max(0.0),
+            turn_clear_m: cfg.turn_radius_m() + cfg.safety.clearance_m,
+        }
+    }
 }
 
 /// A way found by [`plan`].
@@ -382,14 +398,7 @@ mod tests {
 
     /// The default robot: 0.45 m cells, a body 0.26 × 0.24 m, 2 cm clearance, 1 cm band.
     fn geometry() -> SlideGeometry {
-        SlideGeometry {
-            cell_m: 0.45,
-            half_length_m: 0.13,
-            half_width_m: 0.12,
-            clearance_m: 0.02,
-            band_m: 0.01,
-            turn_clear_m: 0.13f64.hypot(0.12) + 0.02,
-        }
+        SlideGeometry::from_config(&crate::CartoConfig::default())
     }
 
     fn all_free(_: (f64, f64), _: (f64, f64)) -> bool {

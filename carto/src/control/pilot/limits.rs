@@ -2,6 +2,7 @@
 //! the checks, `pilot/echoes.rs` asks the echo points), taken once from [`CartoConfig`].
 
 use crate::CartoConfig;
+use crate::slide::SlideGeometry;
 
 /// A look past a turn keeps its readings within its own angle plus this, degrees (the look may
 /// overshoot a little before it settles).
@@ -37,6 +38,8 @@ pub(super) struct Safety {
     /// How far beside the line through the centres a FORWARD's track may lie, metres
     /// ([`Safety::stop_within_m`](crate::config::Safety::stop_within_m) less the lateral tolerance it ends within).
     pub(super) aside_max_m: f64,
+    /// The geometry of local motion ([`crate::slide`]).
+    pub(super) slide: SlideGeometry,
 }
 
 impl Safety {
@@ -56,6 +59,7 @@ impl Safety {
             sonar_sigma_m: cfg.sonar.sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
             aside_max_m: (cfg.safety.stop_within_m - cfg.motion.lateral_tolerance_m).max(0.0),
+            slide: SlideGeometry::from_config(cfg),
         }
     }
 

@@ -21,8 +21,9 @@
 //!   The reason: a passage that leaves the body less than the clearance at the centre, but
 //!   enough a centimetre aside, is one the twin counts as reachable, and without the step aside
 //!   the robot that came through it one way was refused the way back, a trap Cute could not
-//!   leave. When no track clears, the FORWARD may go by a sliding way through its two cells over
-//!   what is known free (`pilot/sliding.rs`, [`crate::slide`]). When none exists either, the
+//!   leave. When no track clears and a complete floor plan is given, the FORWARD may go by a
+//!   sliding way through its two cells (`pilot/sliding.rs`, [`crate::slide`]). When none exists
+//!   either, the
 //!   answer says what the point is evidence of. A point inside
 //!   the body standing at the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`,
 //!   as for a close straight echo. A point anywhere else in the corridor (on the way, or within

@@ -1,19 +1,20 @@
-//! Local motion ([`crate::slide`]): a FORWARD by a sliding way through its two cells when the
-//! straight way and the tracks beside it are blocked (`pilot/safety.rs`, "Corridor"), and, with
-//! a complete floor plan, a turn made where in its cell the turning circle clears.
+//! Local motion ([`crate::slide`]) with a complete floor plan ([`crate::Carto::add_floor_plan`]):
+//! a FORWARD by a sliding way through its two cells when the straight way and the tracks beside
+//! it are blocked (`pilot/safety.rs`, "Corridor"), and a turn made where in its cell the turning
+//! circle clears.
 //!
-//! - **What may be crossed.** Every point held (heard at rest, heard moving, a floor plan) must
+//! - **What may be crossed.** Every point held (heard at rest, heard moving, the plan's) must
 //!   stay out of the body grown by the clearance, all along the way. Beyond the band of tracks a
-//!   straight FORWARD may take, the space the body adds must be known free: with a complete floor
-//!   plan ([`crate::Carto::add_floor_plan`]) all space without a point is; without one, only the
-//!   cells of the localiser's evidence grid that readings and the body's footprint made free. An
-//!   echo point stands for a surface anywhere across the cone, and beside it lies space no
-//!   reading covered (`docs/journal/world-model.md`, round 10): the grid is what tells the two
-//!   apart.
-//! - **Turns.** With a complete floor plan, a turn whose circle holds a point slides first to
-//!   the nearest place in its cell where the circle clears, over the same lattice (the points
-//!   heard at rest and the plan's: the turn check's); without one, the shift along the last
-//!   FORWARD's heading of `pilot/safety.rs` ("Turns") stays.
+//!   straight FORWARD may take, the space the body adds must be known free, and only a complete
+//!   plan says so. An echo point stands for a surface anywhere across the cone, and beside it
+//!   lies space no reading covered (`docs/journal/world-model.md`, round 10). The evidence grid's
+//!   free cells were tried as that knowledge for the one-sonar robot and added hard collisions
+//!   (round 11): they were placed from a belief 12 cm off at the 95th percentile, not free at the
+//!   2 cm the way keeps. Without a plan, Carto keeps the corridor's tracks within the band and
+//!   the turn's shift of `pilot/safety.rs`.
+//! - **Turns.** A turn whose circle holds a point slides first to the nearest place in its cell
+//!   where the circle clears, over the same lattice (the points heard at rest and the plan's:
+//!   the turn check's).
 //! - **How it is driven.** Each leg is a shift at rest, holding the heading
 //!   ([`crate::motor::Motor::start_shift`]), aimed at its point from where the odometry says the
 //!   body is now, so errors do not add up from leg to leg; a FORWARD's last leg is the
@@ -28,9 +29,7 @@ use robot_model::grid::Move;
 use robot_model::time::Instant;
 
 use super::{Io, Pilot, Stage};
-use crate::estimate::grid::Occupancy;
 use crate::slide::{self, SlideGeometry};
-use crate::surroundings::Pose2;
 
 /// The sliding way of the running command, and what the pilot knows of free space.
 #[derive(Debug, Clone, Default)]
@@ -54,21 +53,9 @@ impl Pilot {
         self.sliding.free_space_known
     }
 
-    fn slide_geometry(&self) -> SlideGeometry {
-        let s = self.safety;
-        SlideGeometry {
-            cell_m: s.cell_m,
-            half_length_m: s.half_length_m,
-            half_width_m: s.half_width_m,
-            clearance_m: s.clearance_m,
-            band_m: s.aside_max_m,
-            turn_clear_m: s.turn_clear_m,
-        }
-    }
-
     /// Plans with `plan` from where the robot believes it stands in its stored cell, over the
     /// points within reach of cells A and B (only those heard at rest and the plan's with
-    /// `at_rest_only`), and what is known free.
+    /// `at_rest_only`); `None` without a complete floor plan.
     fn plan_slide<T>(
         &self,
         io: &Io<'_>,
@@ -80,6 +67,9 @@ impl Pilot {
             &dyn Fn((f64, f64), (f64, f64)) -> bool,
         ) -> Option<T>,
     ) -> Option<T> {
+        if !self.sliding.free_space_known {
+            return None;
+        }
         let s = self.safety;
         let frame = self.place.cell_frame()?;
         let off = io.motor.odometry().offset();
@@ -87,16 +77,8 @@ impl Pilot {
         let along = (-0.5 * s.cell_m - reach, 1.5 * s.cell_m + reach);
         let left = (-0.5 * s.cell_m - reach, 0.5 * s.cell_m + reach);
         let points = self.echoes.in_box(frame, along, left, at_rest_only);
-        let grid = self.place.localiser().grid();
-        let free_space_known = self.sliding.free_space_known;
-        let known_free = |along: (f64, f64), left: (f64, f64)| {
-            free_space_known || {
-                let (x, y) = frame.offset(0.0, 0.5 * (left.0 + left.1));
-                let strip = Pose2 { x, y, ..frame };
-                grid.classify_rect(strip, along.0, along.1, 0.5 * (left.1 - left.0)) == Occupancy::Free
-            }
-        };
-        plan(&self.slide_geometry(), (off.along_m, off.left_m), &points, &known_free)
+        // the plan is complete: space without a point is free
+        plan(&s.slide, (off.along_m, off.left_m), &points, &|_, _| true)
     }
 
     /// A sliding way for the FORWARD from where the robot believes it stands, or `None`.
