@@ -224,6 +224,36 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     assert_eq!(h.carto.stats().forwards_slid, 0);
 }
 
+#[test]
+fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
+    // the slide of the test above, cut by a STOP once the body has slid 1.5 cm right
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20_000, |h| h.robot.y <= -0.015), "no slide");
+    h.send(GuiMessage::StopRobot);
+    h.run_ms(1000);
+    let (x, y) = (h.robot.x, h.robot.y);
+    h.run_ms(2000);
+    assert!((h.robot.x - x).hypot(h.robot.y - y) < 0.002, "still moving after the STOP");
+    assert!(h.reply_msgs().is_empty(), "{:?}", h.reply_msgs());
+    // the next FORWARD is planned afresh from where the body stopped, and made
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(30_000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert!(
+        (h.robot.x - 0.45).abs() <= 0.02 && h.robot.y.abs() <= 0.02,
+        "ended at ({:.3}, {:.3})",
+        h.robot.x,
+        h.robot.y
+    );
+}
+
 const WAY_EAST_NOT_CLEAR: [GuiMessage; 3] = [
     GuiMessage::SetObstaclePosition { x: 5, y: 6 },
     GuiMessage::SetRobotPosition { x: 5, y: 5 },

@@ -148,6 +148,7 @@ impl Pilot {
             self.echoes.forget();
         }
         self.tasks.clear();
+        self.sliding.forget();
         self.stage = Stage::Next;
         self.rest_since = now;
     }

@@ -42,6 +42,13 @@ pub(super) struct Sliding {
     track_left_m: f64,
 }
 
+impl Sliding {
+    /// Forgets the legs of a way cut short (a STOP, a disconnect, a lost link).
+    pub(super) fn forget(&mut self) {
+        self.legs.clear();
+    }
+}
+
 impl Pilot {
     /// The floor plan given is complete ([`crate::Carto::add_floor_plan`]).
     pub fn know_free_space(&mut self) {
