@@ -254,6 +254,37 @@ fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
     );
 }
 
+#[test]
+fn a_bump_after_sliding_round_a_leg_backs_off_the_way_the_body_came() {
+    // the slide of the tests above; the bumper pressed once the body has passed the leg
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(30_000, |h| h.robot.x >= 0.33), "did not pass the leg");
+    h.robot.bumper = true;
+    h.run_ms(200);
+    h.robot.bumper = false;
+    let mut closest = f64::INFINITY;
+    for _ in 0..30_000 {
+        h.tick();
+        // beside the leg, the gap between the body's left flank and it
+        if (h.robot.x - 0.16).abs() <= 0.13 {
+            closest = closest.min(0.11 - (h.robot.y + 0.12));
+        }
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+    assert!(closest >= 0.01, "backing off, the body's flank passed {closest:.3} m from the leg");
+    assert!(h.robot.x.hypot(h.robot.y) <= 0.03, "ended at ({:.3}, {:.3})", h.robot.x, h.robot.y);
+}
+
 const WAY_EAST_NOT_CLEAR: [GuiMessage; 3] = [
     GuiMessage::SetObstaclePosition { x: 5, y: 6 },
     GuiMessage::SetRobotPosition { x: 5, y: 5 },

@@ -53,7 +53,8 @@
 //! `forward.rs` (the watches of a running FORWARD) and `sliding.rs` (local motion: the legs of
 //! a sliding way, and whether free space is known). The pilot itself holds the stage machine
 //! (`stage.rs`) and sequences the parts: requests and link events (`session.rs`), starting a
-//! command (`commands.rs`), the scan, corridor and turn checks (`safety.rs`). Every step of a
+//! command (`commands.rs`), the scan, corridor and turn checks (`safety.rs`), a FORWARD stopped
+//! short (`stopped.rs`). Every step of a
 //! poll takes one [`Io`]: the time, the motor and the readings.
 //!
 //! ```
@@ -93,6 +94,7 @@ mod session;
 mod sliding;
 mod stage;
 mod stall;
+mod stopped;
 mod tasks;
 
 use echoes::Echoes;
@@ -100,7 +102,6 @@ use forward::ForwardWatch;
 use limits::Safety;
 use localisation::Localisation;
 use sliding::Sliding;
-use stall::Stall;
 use tasks::{Next, Tasks};
 
 pub use interface::{Health, InputNote, Io, PilotCounters, Reply, Request};
@@ -122,7 +123,7 @@ pub struct Pilot {
     echoes: Echoes,
     /// The watches of the running FORWARD.
     forward: ForwardWatch,
-    /// The sliding way of the running FORWARD.
+    /// The sliding way of the running FORWARD or turn.
     sliding: Sliding,
     stage: Stage,
     rest_since: Instant,
@@ -478,6 +479,8 @@ impl Pilot {
                 },
                 Stage::BackingOff => match io.motor.take_outcome() {
                     None if io.motor.is_busy() => return,
+                    // a sliding way is retraced leg by leg
+                    None | Some(Ok(())) if self.retrace_slide(io) => {}
                     None | Some(Ok(())) => self.end_task(io.now),
                     Some(Err(e)) => {
                         tracing::warn!(error = %e, "back-off after the bumper, a stall or a push failed");
@@ -536,64 +539,5 @@ impl Pilot {
                 self.end_task(io.now);
             }
         }
-    }
-
-    fn bumped(&mut self, io: &mut Io<'_>) {
-        io.motor.stop(io.now);
-        self.counters.bumps += 1;
-        tracing::warn!(travelled_m = ?io.motor.travelled_m(io.sensors), "bumper pressed during FORWARD: stopped");
-        self.end_stopped_forward(io);
-    }
-
-    /// Something turned the body under its wheels during a FORWARD: stop and end as after the
-    /// bumper (module docs, "Pushed").
-    fn pushed(&mut self, io: &mut Io<'_>) {
-        io.motor.stop(io.now);
-        self.counters.pushes += 1;
-        tracing::warn!(
-            travelled_m = ?io.motor.travelled_m(io.sensors),
-            "the IMU saw the body turned under its wheels during a FORWARD: stopped"
-        );
-        self.end_stopped_forward(io);
-    }
-
-    /// Ends a FORWARD stopped short (the bumper, a stall, a push): the echoes heard while it
-    /// drove are forgotten (placed from odometry that did not see what stopped it), the cell
-    /// ahead is reported blocked, and the robot drives back before `MOVE_DONE`.
-    fn end_stopped_forward(&mut self, io: &mut Io<'_>) {
-        self.echoes.forget_moving();
-        self.place.touched();
-        self.report_obstacle();
-        self.back_off_or_end(io);
-    }
-
-    /// The FORWARD is stalled (`pilot/stall.rs`): stop, take the sonar's word for how far the
-    /// body went, report the cell ahead as blocked and drive back, as after the bumper.
-    fn stalled(&mut self, io: &mut Io<'_>, stall: Stall) {
-        io.motor.stop(io.now);
-        self.counters.stalls += 1;
-        tracing::warn!(
-            driven_m = stall.driven_m,
-            wheels_m = stall.wheels_m,
-            "FORWARD stalled: the range held while the wheels drove; stopped"
-        );
-        // the wheels went on after that echo while the body stood: the odometry now says where
-        // the sonar put the body
-        let now_m = io.motor.cell_offset(io.now, io.sensors).along_m;
-        io.motor.correct_along(self.forward.stall_correction_m(stall, now_m));
-        self.end_stopped_forward(io);
-    }
-
-    /// After a FORWARD stopped short: drive back to the cell it started from, then `MOVE_DONE`
-    /// (at once when the motor cannot start the way back).
-    fn back_off_or_end(&mut self, io: &mut Io<'_>) {
-        match io.motor.start_return(io.now, io.sensors) {
-            Ok(()) => {
-                self.stage = Stage::BackingOff;
-                return;
-            }
-            Err(e) => tracing::warn!(error = %e, "cannot back off"),
-        }
-        self.end_task(io.now);
     }
 }

@@ -17,17 +17,27 @@
 //!   the space the body adds beside that band is known free (a complete floor plan says so of all
 //!   space without a point; an evidence grid could, of the cells it holds free).
 //! - The body moves between neighbouring clear points (a diagonal step only when both steps
-//!   along the axes are clear too), so every position on the way keeps the clearance: a
+//!   along the axes are clear too), so every position on the lattice way keeps the clearance: a
 //!   rectangle moved by less than its size along one axis stays within the two rectangles at
 //!   its ends, and one inside a lattice square stays within the four at its corners.
+//! - A body that stands within the clearance of something may move onto points whose deepest
+//!   intrusion is no deeper than where it stands (so a robot stopped close to a wall is not
+//!   stuck), never onto one whose body itself holds a point. The rule compares the deepest
+//!   intrusion only: such a body may come as near another point as it stands to the nearest.
 //! - The way found is the cheapest, a step across costing [`ACROSS_COST`] times a step along
 //!   (a slide sideways is slower and less precise than a drive), and a lattice point whose grown
 //!   body comes within [`COMFORT_M`] of a point costing up to [`NEAR_COST`] steps more, the
 //!   nearer the dearer: where the space allows, the way keeps farther than the clearance, as a
 //!   costmap's inflation does, so that the belief's error (2 cm at the 95th percentile with the
 //!   room known, `docs/journal/world-model.md`) is not spent at every pass. It is returned as
-//!   the fewest straight legs whose lattice squares are all clear, then a last drive straight
-//!   along its track to B's centre.
+//!   straight legs, joined greedily from the start as far as every lattice square a leg crosses
+//!   is clear (sampled at an eighth of a step), then a last drive straight along its track to B's
+//!   centre.
+//! - The motor does not drive a diagonal leg on its straight line: it drives along the heading
+//!   first and strafes the rest ([`crate::motor::Motor::start_shift`]), up to about a centimetre
+//!   off the checked line; the comfort cost is the only margin for that. Legs along one axis
+//!   only (driven as checked) were measured and lost significantly: more strafing, a worse
+//!   belief (`docs/journal/world-model.md`, round 11).
 //! - `None` when no way exists: the caller refuses the FORWARD.
 
 use std::cmp::Reverse;
@@ -129,11 +139,11 @@ impl Lattice {
         (f64::from(i - self.origin.0) * self.step, f64::from(j - self.origin.1) * self.step)
     }
 
+    /// The lattice index nearest `(along, left)` (it may lie outside the lattice; far values
+    /// are clamped well outside it).
     fn nearest(&self, (along, left): (f64, f64)) -> (i32, i32) {
-        (
-            (along / self.step).round() as i32 + self.origin.0,
-            (left / self.step).round() as i32 + self.origin.1,
-        )
+        let index = |v: f64, origin: i32| (v / self.step).round().clamp(-1e6, 1e6) as i32 + origin;
+        (index(along, self.origin.0), index(left, self.origin.1))
     }
 }
 
@@ -158,10 +168,11 @@ pub fn plan(
     Some(into_legs(&lattice, start, &path, true))
 }
 
-/// Plans where in cell A a turn on the spot can be made: the nearest place, reached by sliding
-/// from `start` facing the heading, where no point lies within the turning circle grown by the
+/// Plans where in cell A a turn on the spot can be made: the place cheapest to reach by sliding
+/// from `start` facing the heading where no point lies within the turning circle grown by the
 /// clearance ([`SlideGeometry::turn_clear_m`]), with the comfort beyond it when one such place
-/// is reachable. The legs to slide to it; empty when the body can turn where it stands; `None`
+/// is reachable, else with half a lattice diagonal (the body stands up to that far from its
+/// lattice point). The legs to slide to it; empty when the body can turn where it stands; `None`
 /// when no place in the cell clears. `known_free` as for [`plan`].
 pub fn plan_turn(
     g: &SlideGeometry,
@@ -175,8 +186,9 @@ pub fn plan_turn(
         let (a, l) = lattice.position(node);
         points.iter().map(|&(pa, pl)| (pa - a).hypot(pl - l) - g.turn_clear_m).fold(f64::INFINITY, f64::min)
     };
-    let path = search(&lattice, from, |node| circle_gap(node) >= COMFORT_M)
-        .or_else(|| search(&lattice, from, |node| circle_gap(node) > 0.0))?;
+    let path = search(&lattice, from, |node| circle_gap(node) >= COMFORT_M).or_else(|| {
+        search(&lattice, from, |node| circle_gap(node) > lattice.step * std::f64::consts::FRAC_1_SQRT_2)
+    })?;
     Some(into_legs(&lattice, start, &path, false).legs)
 }
 
@@ -419,9 +431,9 @@ mod tests {
         assert_eq!(slide, Slide { legs: vec![], track_left_m: 0.0 });
     }
 
-    /// A chair leg 30 cm ahead and 10 cm left lies in the straight way (14 cm either side of the
-    /// line) and beyond B's centre's body (whose back face is at 32 cm... the leg is 2 cm inside
-    /// the body's way at B): the way slides right around it and back to the band.
+    /// A chair leg 20 cm ahead and 10 cm left lies in the straight way (14 cm either side of the
+    /// line), behind the body standing at B's centre: the way slides right around it and back to
+    /// the band.
     #[test]
     fn a_leg_in_the_way_is_passed_by_sliding_and_the_way_ends_in_the_band() {
         let g = geometry();

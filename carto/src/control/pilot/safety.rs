@@ -412,6 +412,7 @@ impl Pilot {
 
     /// The corridor check, then the FORWARD.
     fn drive_forward(&mut self, io: &mut Io<'_>) {
+        self.sliding.forget();
         if self.scan_missing {
             return self.fail(io.now, "scan incomplete: no distance reading at rest");
         }

@@ -20,7 +20,10 @@
 //!   body is now, so errors do not add up from leg to leg; a FORWARD's last leg is the
 //!   cartography FORWARD on its track ([`crate::motor::Motor::start_next_cell_on`]), with every
 //!   watch of a FORWARD. The bumper pressed during a FORWARD's leg ends the FORWARD as a bump
-//!   during it does; during a leg before a turn, it ends the turn as failed.
+//!   during it does; during a leg before a turn, it ends the turn as failed. A FORWARD stopped
+//!   short (the bumper, a stall, a push) backs off over the places its way passed, in reverse
+//!   ([`Pilot::retrace_slide`]): the straight way back to the cell's centre would cross what the
+//!   way went round.
 //! - **What Cute hears.** Nothing new: a FORWARD made, or refused as before; a turn made or not.
 
 use std::collections::VecDeque;
@@ -40,12 +43,17 @@ pub(super) struct Sliding {
     legs: VecDeque<(f64, f64)>,
     /// The track of a FORWARD's last leg, left of the line through the centres.
     track_left_m: f64,
+    /// Where the body stood when the running FORWARD's sliding way began and at the end of each
+    /// leg since: a back-off retraces them ([`Pilot::retrace_slide`]).
+    visited: Vec<(f64, f64)>,
 }
 
 impl Sliding {
-    /// Forgets the legs of a way cut short (a STOP, a disconnect, a lost link).
+    /// Forgets the legs of a way cut short (a STOP, a disconnect, a lost link), or of the last
+    /// FORWARD when the next begins.
     pub(super) fn forget(&mut self) {
         self.legs.clear();
+        self.visited.clear();
     }
 }
 
@@ -104,6 +112,8 @@ impl Pilot {
         self.counters.forwards_slid += 1;
         self.sliding.legs = way.legs.into();
         self.sliding.track_left_m = way.track_left_m;
+        let off = io.motor.odometry().offset();
+        self.sliding.visited = vec![(off.along_m, off.left_m)];
         self.next_leg(io, io.now, None);
     }
 
@@ -124,7 +134,8 @@ impl Pilot {
             }
             self.forward.start(io, None);
             return match io.motor.start_next_cell_on(io.now, self.sliding.track_left_m, io.sensors) {
-                Ok(_) => self.stage = Stage::Moving { kind: Move::Forward, since },
+                // the FORWARD's watches start with its drive, not with the legs before it
+                Ok(_) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },
                 Err(e) => self.fail(io.now, &e.to_string()),
             };
         };
@@ -132,6 +143,24 @@ impl Pilot {
         match io.motor.start_shift(io.now, along - off.along_m, left - off.left_m, io.sensors) {
             Ok(()) => self.stage = Stage::Sliding { since, turn },
             Err(e) => self.fail(io.now, &format!("a leg of a sliding way: {e}")),
+        }
+    }
+
+    /// Backs off over the running FORWARD's sliding way: to the last place the body passed,
+    /// which it leaves; `false` when there is none (the FORWARD was not slid) or the motor cannot
+    /// start. A sliding way goes round what blocks the straight one, so the straight way back
+    /// to the cell's centre would cross it: the way back is the way the body came, space it has
+    /// just swept.
+    pub(super) fn retrace_slide(&mut self, io: &mut Io<'_>) -> bool {
+        let Some((along, left)) = self.sliding.visited.pop() else { return false };
+        let off = io.motor.odometry().offset();
+        match io.motor.start_shift(io.now, along - off.along_m, left - off.left_m, io.sensors) {
+            Ok(()) => true,
+            Err(e) => {
+                tracing::warn!(error = %e, "cannot back off over the sliding way");
+                self.sliding.visited.clear();
+                false
+            }
         }
     }
 
@@ -153,13 +182,23 @@ impl Pilot {
         match io.motor.take_outcome() {
             None if io.motor.is_busy() => false,
             None | Some(Ok(())) => {
+                if turn.is_none() {
+                    let off = io.motor.odometry().offset();
+                    self.sliding.visited.push((off.along_m, off.left_m));
+                }
                 self.next_leg(io, since, turn);
                 true
             }
             Some(Err(e)) => {
                 self.sliding.legs.clear();
-                self.echoes.forget_moving();
-                self.fail(io.now, &format!("a leg of a sliding way failed: {e}"));
+                match turn {
+                    // as after the old shift before a turn: turn if the circle clears from here
+                    Some(mv) => self.turn_after_failed_shift(io, mv, &e.to_string()),
+                    None => {
+                        self.echoes.forget_moving();
+                        self.fail(io.now, &format!("a leg of a sliding way failed: {e}"));
+                    }
+                }
                 true
             }
         }
