@@ -164,23 +164,32 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
     assert!(h.robot.yaw.to_degrees().abs() <= 2.5, "left facing {:.1} deg", h.robot.yaw.to_degrees());
 }
 
-#[test]
-fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
-    // cell (5, 5) facing east, 0.45 m cells: a known leg 16 cm ahead and 11 cm left of the
-    // centre line, 3 cm inside the 14 cm half corridor and 16 cm behind the body at the next
-    // centre (in 0.30 m cells it lies inside the body grown by the clearance there: refused, as
-    // the way is not clear)
-    let cells_45 = || {
-        fake::test_config_with(|c| {
-            c.cell_size_m = 0.45;
-            c.safety.obstacle_threshold_cm = 45.0;
-        })
-    };
-    let mut h = ready_with(cells_45());
+/// Cell (5, 5) facing east, 0.45 m cells, the sonar hearing nothing: a FORWARD sent with a
+/// known leg 16 cm ahead and 11 cm left of the centre line, 3 cm inside the 14 cm half corridor
+/// and 16 cm behind the body at the next centre; with a floor plan (`plan`) or the leg's point
+/// alone.
+fn forward_past_a_leg(plan: bool) -> Harness {
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
+    let leg = [(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)];
+    if plan {
+        h.carto.add_floor_plan(leg);
+    } else {
+        h.carto.add_known_surfaces(leg);
+    }
     h.send(cartography(Command::Forward));
+    h
+}
+
+#[test]
+fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
+    // (in 0.30 m cells the leg lies inside the body grown by the clearance at the next centre:
+    // refused, as the way is not clear)
+    let mut h = forward_past_a_leg(true);
     let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
     for _ in 0..30_000 {
         h.tick();
@@ -214,11 +223,7 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
     // control, 0.45 m cells, the leg known but no floor plan and nothing heard beside the line:
     // the space the slide would cross is not known free
-    let mut h = ready_with(cells_45());
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.carto.add_known_surfaces([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
-    h.send(cartography(Command::Forward));
+    let mut h = forward_past_a_leg(false);
     assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
     assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
     assert_eq!(h.carto.stats().forwards_slid, 0);
@@ -227,14 +232,7 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
 #[test]
 fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
     // the slide of the test above, cut by a STOP once the body has slid 1.5 cm right
-    let mut h = ready_with(fake::test_config_with(|c| {
-        c.cell_size_m = 0.45;
-        c.safety.obstacle_threshold_cm = 45.0;
-    }));
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
-    h.send(cartography(Command::Forward));
+    let mut h = forward_past_a_leg(true);
     assert!(h.run_until(20_000, |h| h.robot.y <= -0.015), "no slide");
     h.send(GuiMessage::StopRobot);
     h.run_ms(1000);
@@ -257,14 +255,7 @@ fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
 #[test]
 fn a_bump_after_sliding_round_a_leg_backs_off_the_way_the_body_came() {
     // the slide of the tests above; the bumper pressed once the body has passed the leg
-    let mut h = ready_with(fake::test_config_with(|c| {
-        c.cell_size_m = 0.45;
-        c.safety.obstacle_threshold_cm = 45.0;
-    }));
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.carto.add_floor_plan([(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)]);
-    h.send(cartography(Command::Forward));
+    let mut h = forward_past_a_leg(true);
     assert!(h.run_until(30_000, |h| h.robot.x >= 0.33), "did not pass the leg");
     h.robot.bumper = true;
     h.run_ms(200);
