@@ -44,22 +44,24 @@ pub(super) struct Safety {
 
 impl Safety {
     pub(super) fn new(cfg: &CartoConfig) -> Safety {
+        // the body, the clearance, the band and the turning circle, worked out once
+        let slide = SlideGeometry::from_config(cfg);
         Safety {
             scan_deg: cfg.safety.scan_deg.map_or(0.0, f64::abs),
-            cell_m: cfg.cell_size_m,
+            cell_m: slide.cell_m,
             mount_m: cfg.sonar.mount_m,
             half_cone_deg: 0.5 * cfg.sonar.cone_deg,
             max_range_m: cfg.sonar.max_m,
-            half_length_m: 0.5 * cfg.chassis.body_length_m,
-            half_width_m: 0.5 * cfg.chassis.body_width_m,
-            clearance_m: cfg.safety.clearance_m,
-            turn_clear_m: cfg.turn_radius_m() + cfg.safety.clearance_m,
+            half_length_m: slide.half_length_m,
+            half_width_m: slide.half_width_m,
+            clearance_m: slide.clearance_m,
+            turn_clear_m: slide.turn_clear_m,
             look_past_deg: cfg.safety.look_past_turn_deg.map_or(0.0, f64::abs),
             sonar_lag_s: cfg.sonar.lag.as_secs_f64(),
             sonar_sigma_m: cfg.sonar.sigma_m,
             drive_timing_m: cfg.drive_timing_m(),
-            aside_max_m: (cfg.safety.stop_within_m - cfg.motion.lateral_tolerance_m).max(0.0),
-            slide: SlideGeometry::from_config(cfg),
+            aside_max_m: slide.band_m,
+            slide,
         }
     }
 

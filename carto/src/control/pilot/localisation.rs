@@ -177,16 +177,13 @@ impl Localisation {
     /// [`Self::believed`] with the odometry's offset `off` from the stored cell's centre (carried
     /// to another moment).
     pub(super) fn believed_with(&self, io: &Io<'_>, off: CellOffset) -> Option<Pose2> {
-        let GridPose { x: row, y: col, heading } = self.pose?;
-        let nominal = heading_deg(heading);
-        let centre =
-            Pose2 { x: f64::from(col) * self.cell_m, y: -f64::from(row) * self.cell_m, yaw_deg: nominal };
+        let centre = self.cell_frame()?;
         let (x, y) = centre.offset(off.along_m, off.left_m);
         let turned = match (io.motor.reference_deg(), io.sensors.yaw_deg()) {
             (Some(reference), Some(yaw)) => yaw.value - reference,
             _ => 0.0,
         };
-        Some(Pose2 { x, y, yaw_deg: nominal + turned })
+        Some(Pose2 { x, y, yaw_deg: centre.yaw_deg + turned })
     }
 
     /// Corrects the belief from the straight reading `cm` taken at rest now (`pilot/safety.rs`,

@@ -23,10 +23,9 @@
 //!   the robot that came through it one way was refused the way back, a trap Cute could not
 //!   leave. When no track clears and a complete floor plan is given, the FORWARD may go by a
 //!   sliding way through its two cells (`pilot/sliding.rs`, [`crate::slide`]). When none exists
-//!   either, the
-//!   answer says what the point is evidence of. A point inside
-//!   the body standing at the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`,
-//!   as for a close straight echo. A point anywhere else in the corridor (on the way, or within
+//!   either, the answer says what the point is evidence of. A point inside the body standing at
+//!   the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`, as for a close
+//!   straight echo. A point anywhere else in the corridor (on the way, or within
 //!   the clearance beside the body) says only that the way is not clear:
 //!   `SET_OBSTACLE_POSITION`, then `SET_ROBOT_POSITION` with the robot's own cell, which Cute
 //!   reads as a blocked move, the cell left unknown (`protocol/README.md`, "Refused FORWARD").
@@ -36,9 +35,9 @@
 //! - **Turns.** A turn starts only if no echo point lies inside the circle the body sweeps (half
 //!   its diagonal plus the clearance). Otherwise, with a complete floor plan, the body slides in
 //!   its cell to the nearest place where the circle clears (`pilot/sliding.rs`); without one,
-//!   Carto first drives back or forth along its
-//!   heading, by the smallest shift (from 2 cm, twice the distance tolerance, in 1 cm steps, at
-//!   most a quarter cell) after which the circle is clear. "Its heading" is the heading of the
+//!   Carto first drives back or forth along its heading, by the smallest shift (from 2 cm, twice
+//!   the distance tolerance, in 1 cm steps, at most a quarter cell) after which the circle is
+//!   clear. "Its heading" is the heading of the
 //!   last FORWARD, not the one the body faces: back along it is the way the body came (space it
 //!   swept), ahead is where it ranged; after a turn on the spot, behind the new heading is space
 //!   no reading covered, and a shift there met walls never heard; when none is, it refuses the turn:

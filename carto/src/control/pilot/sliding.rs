@@ -88,7 +88,8 @@ impl Pilot {
         let s = self.safety;
         let frame = self.place.cell_frame()?;
         let off = io.motor.odometry().offset();
-        let reach = s.turn_clear_m.max(s.half_length_m.hypot(s.half_width_m) + s.clearance_m);
+        // the turning circle reaches farthest: half the body's diagonal plus the clearance
+        let reach = s.turn_clear_m;
         let along = (-0.5 * s.cell_m - reach, 1.5 * s.cell_m + reach);
         let left = (-0.5 * s.cell_m - reach, 0.5 * s.cell_m + reach);
         let points = self.echoes.in_box(frame, along, left, at_rest_only);
