@@ -187,7 +187,7 @@ fn forward_past_a_leg(plan: bool) -> Harness {
 
 #[test]
 fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
-    // (in 0.30 m cells the leg lies inside the body grown by the clearance at the next centre:
+    // (in 0.30 m cells, a leg deep in the body grown by the clearance at the next centre:
     // refused, as the way is not clear)
     let mut h = forward_past_a_leg(true);
     let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
@@ -211,11 +211,12 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     assert!(closest >= 0.01, "the body's flank passed {closest:.3} m from the leg");
     assert!((h.robot.x - 0.45).abs() <= 0.015, "drove {:.3} m", h.robot.x);
     assert!(h.robot.y.abs() <= 0.02, "ended {:.4} m left of the line", h.robot.y);
-    // control, 0.30 m cells: the leg lies in the clearance of the body at the next centre
+    // control, 0.30 m cells, the leg 16.5 cm ahead: it lies 1.5 cm deep in the clearance of the
+    // body at the next centre (not in the body), deeper than the 1 cm a FORWARD may stop off it
     let mut h = ready_with(fake::test_config());
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
-    h.carto.add_floor_plan([(5.0 * 0.30 + 0.16, -5.0 * 0.30 + 0.11)]);
+    h.carto.add_floor_plan([(5.0 * 0.30 + 0.165, -5.0 * 0.30 + 0.11)]);
     h.send(cartography(Command::Forward));
     assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
     assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);

@@ -266,12 +266,25 @@ impl Motor {
         track_left_m: f64,
         s: &SensorState,
     ) -> Result<f64, MoveError> {
+        self.start_next_cell_at(now, track_left_m, 0.0, s)
+    }
+
+    /// [`Motor::start_next_cell_on`], stopping `stop_along_m` ahead of the next cell's centre
+    /// (negative: short of it; at most a quarter cell either way).
+    pub fn start_next_cell_at(
+        &mut self,
+        now: Instant,
+        track_left_m: f64,
+        stop_along_m: f64,
+        s: &SensorState,
+    ) -> Result<f64, MoveError> {
         self.fresh_counts(now, s)?;
         self.hold_reference(now, s)?;
         let cell = self.cfg.cell_size_m;
         // The offset and the baseline counts of the same sample, so the target is consistent.
         let off = self.odo.offset();
-        let metres = cell - off.along_m.clamp(-0.5 * cell, cell);
+        let stop = if stop_along_m.is_finite() { stop_along_m.clamp(-0.25 * cell, 0.25 * cell) } else { 0.0 };
+        let metres = cell + stop - off.along_m.clamp(-0.5 * cell, cell);
         tracing::debug!(
             along_m = off.along_m,
             left_m = off.left_m,

@@ -38,6 +38,10 @@
 //!   off the checked line; the comfort cost is the only margin for that. Legs along one axis
 //!   only (driven as checked) were measured and lost significantly: more strafing, a worse
 //!   belief (`docs/journal/world-model.md`, round 11).
+//! - The way ends on B's centre line across the heading, within the band of the line; when no
+//!   such point clears, anywhere within the band of B's centre ([`Slide::stop_along_m`]): a
+//!   surface a few millimetres inside the clearance at B's centre stops the FORWARD short, not
+//!   the robot's tour, and a FORWARD slid one way round a leg can be made back.
 //! - `None` when no way exists: the caller refuses the FORWARD.
 
 use std::cmp::Reverse;
@@ -95,6 +99,9 @@ pub struct Slide {
     pub legs: Vec<(f64, f64)>,
     /// The track of the last drive to B's centre, metres left of the line.
     pub track_left_m: f64,
+    /// Where the last drive stops, metres ahead of B's centre (negative: short of it); 0 unless
+    /// B's centre line holds no clear point within the band.
+    pub stop_along_m: f64,
 }
 
 /// The lattice over A and B.
@@ -160,12 +167,23 @@ pub fn plan(
     // the body's centre stays in A or B
     let (lattice, per_cell) = Lattice::build(g, start, 1, points, known_free)?;
     let from = lattice.nearest(start);
-    let path = search(&lattice, from, |(i, j)| {
-        i == lattice.origin.0 + per_cell
-            && (f64::from(j - lattice.origin.1) * lattice.step).abs() <= g.band_m + 1e-9
-            && lattice.is_clear((i, j))
+    let off_centre = |(i, j): (i32, i32)| {
+        let (along, left) = lattice.position((i, j));
+        (along - f64::from(per_cell) * lattice.step, left)
+    };
+    // on B's centre line across when it can, else anywhere within the band of it
+    let path = search(&lattice, from, |node| {
+        let (along, left) = off_centre(node);
+        along.abs() < 1e-9 && left.abs() <= g.band_m + 1e-9 && lattice.is_clear(node)
+    })
+    .or_else(|| {
+        search(&lattice, from, |node| {
+            let (along, left) = off_centre(node);
+            along.hypot(left) <= g.band_m + 1e-9 && lattice.is_clear(node)
+        })
     })?;
-    Some(into_legs(&lattice, start, &path, true))
+    let stop_along_m = path.last().map_or(0.0, |&goal| off_centre(goal).0);
+    Some(Slide { stop_along_m, ..into_legs(&lattice, start, &path, true) })
 }
 
 /// Plans where in cell A a turn on the spot can be made: the place cheapest to reach by sliding
@@ -343,7 +361,7 @@ fn search(
 /// `final_drive`, the drive along the last track.
 fn into_legs(lattice: &Lattice, start: (f64, f64), path: &[(i32, i32)], final_drive: bool) -> Slide {
     let Some(&goal) = path.last() else {
-        return Slide { legs: Vec::new(), track_left_m: start.1 };
+        return Slide { legs: Vec::new(), track_left_m: start.1, stop_along_m: 0.0 };
     };
     // the last drive: back along the path while it keeps the goal's track
     let mut drive_from = path.len() - 1;
@@ -370,7 +388,7 @@ fn into_legs(lattice: &Lattice, start: (f64, f64), path: &[(i32, i32)], final_dr
     if legs.first().is_some_and(|&(a, l)| (a - start.0).hypot(l - start.1) < 0.5 * lattice.step) {
         legs.remove(0);
     }
-    Slide { legs, track_left_m }
+    Slide { legs, track_left_m, stop_along_m: 0.0 }
 }
 
 /// The dearest nearness ([`NEAR_COST`]) on the lattice points `nodes`.
@@ -428,7 +446,7 @@ mod tests {
     #[test]
     fn an_open_floor_needs_no_slide() {
         let slide = plan(&geometry(), (0.0, 0.0), &[], &all_free).unwrap();
-        assert_eq!(slide, Slide { legs: vec![], track_left_m: 0.0 });
+        assert_eq!(slide, Slide { legs: vec![], track_left_m: 0.0, stop_along_m: 0.0 });
     }
 
     /// A chair leg 20 cm ahead and 10 cm left lies in the straight way (14 cm either side of the
@@ -483,6 +501,24 @@ mod tests {
     fn no_way_when_the_space_beside_the_band_is_not_known_free() {
         let leg = [(0.20, 0.10)];
         assert_eq!(plan(&geometry(), (0.0, 0.0), &leg, &|_, _| false), None);
+    }
+
+    /// A wall across the way whose surface lies 6 mm inside the clearance of the body at B's
+    /// centre: the FORWARD stops short within the band; 15 mm inside, beyond the band, no way.
+    #[test]
+    fn a_wall_just_inside_the_clearance_at_the_next_centre_stops_the_way_short() {
+        let g = geometry();
+        let at_centre = g.cell_m + g.half_length_m + g.clearance_m;
+        let wall = |inside: f64| -> Vec<(f64, f64)> {
+            (-30..=30).map(|k| (at_centre - inside, f64::from(k) * 0.01)).collect()
+        };
+        let slide = plan(&g, (0.0, 0.0), &wall(0.006), &all_free).unwrap();
+        assert!(slide.legs.is_empty(), "{slide:?}");
+        assert!(slide.stop_along_m <= -0.006 && slide.stop_along_m >= -g.band_m - 1e-9, "{slide:?}");
+        assert!(slide.track_left_m.hypot(slide.stop_along_m) <= g.band_m + 1e-9, "{slide:?}");
+        // nothing in the way: the FORWARD ends on the centre
+        assert_eq!(plan(&g, (0.0, 0.0), &wall(-0.01), &all_free).map(|s| s.stop_along_m), Some(0.0));
+        assert_eq!(plan(&g, (0.0, 0.0), &wall(0.015), &all_free), None);
     }
 
     /// A wall across the way, 40 cm ahead, from 30 cm right to 30 cm left: no way round inside

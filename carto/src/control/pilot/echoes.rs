@@ -6,7 +6,8 @@
 //! for the one that refused a FORWARD ([`Echoes::keep_as_at_rest`]); a reading at rest clears
 //! both kinds where it saw through them and under the body; all points are in the frame of
 //! [`crate::surroundings`], placed from the stored pose, so a new pose forgets them
-//! ([`Echoes::forget`]).
+//! ([`Echoes::forget`]); with a complete floor plan no reading adds a point
+//! ([`Echoes::plan_is_complete`]).
 
 use robot_model::time::Instant;
 
@@ -37,6 +38,8 @@ pub(super) struct Echoes {
     moving: Surroundings,
     /// When the last reading kept during a turn arrived.
     last_turn_reading: Option<Instant>,
+    /// A complete floor plan is held: readings add no point ([`Echoes::plan_is_complete`]).
+    plan_complete: bool,
 }
 
 impl Echoes {
@@ -47,7 +50,18 @@ impl Echoes {
             at_rest: Surroundings::default(),
             moving: Surroundings::default(),
             last_turn_reading: None,
+            plan_complete: false,
         }
+    }
+
+    /// The floor plan held is complete ([`crate::Carto::add_floor_plan`]): every surface is one
+    /// of its points, so a reading adds none. An echo point stands for a surface anywhere across
+    /// the cone and is placed on its axis or edge; beside the plan's exact points it only adds
+    /// surfaces that are not there.
+    pub(super) fn plan_is_complete(&mut self) {
+        self.plan_complete = true;
+        self.at_rest.clear();
+        self.moving.clear();
     }
 
     /// Every echo point held, in the grid's metric frame: those kept at rest and those heard
@@ -88,6 +102,9 @@ impl Echoes {
     pub(super) fn note_at_rest(&mut self, robot: Pose2, cm: Option<f32>) {
         let s = self.safety;
         let range = cm.map(|cm| f64::from(cm) / 100.0);
+        if self.plan_complete {
+            return;
+        }
         self.at_rest.clear_footprint(robot, s.half_length_m, s.half_width_m);
         self.at_rest.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
         self.moving.clear_footprint(robot, s.half_length_m, s.half_width_m);
@@ -104,6 +121,9 @@ impl Echoes {
     /// the closest of many noisy readings of a wall just past the corridor's end would otherwise
     /// fall inside it.
     pub(super) fn keep_on_far_edge(&mut self, robot: Pose2, line_deg: f64, range: f64) {
+        if self.plan_complete {
+            return;
+        }
         let s = self.safety;
         let range = range + FAR_SIGMAS * s.sonar_sigma_m;
         let line = Pose2 { yaw_deg: line_deg, ..robot };
@@ -259,5 +279,28 @@ mod tests {
         let mut far = Echoes::new(Safety::new(&cfg));
         far.add_fixed(vec![(0.30, 0.23)]);
         assert_eq!(far.sidestep(robot, -0.08, to, half), Some(0.0));
+    }
+
+    /// With a complete floor plan a reading adds no point, heard at rest or moving; the plan's
+    /// own points still stand in the way.
+    #[test]
+    fn with_a_complete_plan_readings_add_no_points() {
+        let cfg = CartoConfig::default();
+        let robot = Pose2 { x: 0.0, y: 0.0, yaw_deg: 0.0 };
+        let (to, half) = (0.45 + 0.13, 0.12 + 0.02);
+        let mut heard = Echoes::new(Safety::new(&cfg));
+        heard.note_at_rest(robot, Some(30.0));
+        heard.keep_on_far_edge(robot, 0.0, 0.5);
+        assert!(heard.points().count() >= 2);
+        let mut planned = Echoes::new(Safety::new(&cfg));
+        planned.add_fixed(vec![(0.40, 0.0)]);
+        planned.note_at_rest(robot, Some(30.0));
+        planned.plan_is_complete();
+        assert_eq!(planned.points().count(), 0, "the reading before the plan was forgotten");
+        planned.note_at_rest(robot, Some(30.0));
+        planned.keep_on_far_edge(robot, 0.0, 0.5);
+        assert_eq!(planned.points().count(), 0);
+        let hit = planned.in_way(robot, to, half, 0.0).unwrap();
+        assert!((hit.at.0 - 0.40).abs() < 1e-9 && !hit.heard_moving, "{hit:?}");
     }
 }

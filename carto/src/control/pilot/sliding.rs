@@ -3,18 +3,17 @@
 //! it are blocked (`pilot/safety.rs`, "Corridor"), and a turn made where in its cell the turning
 //! circle clears.
 //!
-//! - **What may be crossed.** Every point held (heard at rest, heard moving, the plan's) must
-//!   stay out of the body grown by the clearance, all along the way. Beyond the band of tracks a
-//!   straight FORWARD may take, the space the body adds must be known free, and only a complete
-//!   plan says so. An echo point stands for a surface anywhere across the cone, and beside it
+//! - **What may be crossed.** Every point held (the plan's: with a complete plan no reading
+//!   adds one) must stay out of the body grown by the clearance, all along the way. Beyond the
+//!   band of tracks a straight FORWARD may take, the space the body adds must be known free, and
+//!   only a complete plan says so. An echo point stands for a surface anywhere across the cone, and beside it
 //!   lies space no reading covered (`docs/journal/world-model.md`, round 10). The evidence grid's
 //!   free cells were tried as that knowledge for the one-sonar robot and added hard collisions
 //!   (round 11): they were placed from a belief 12 cm off at the 95th percentile, not free at the
 //!   2 cm the way keeps. Without a plan, Carto keeps the corridor's tracks within the band and
 //!   the turn's shift of `pilot/safety.rs`.
 //! - **Turns.** A turn whose circle holds a point slides first to the nearest place in its cell
-//!   where the circle clears, over the same lattice (the points heard at rest and the plan's:
-//!   the turn check's).
+//!   where the circle clears, over the same lattice.
 //! - **How it is driven.** Each leg is a shift at rest, holding the heading
 //!   ([`crate::motor::Motor::start_shift`]), aimed at its point from where the odometry says the
 //!   body is now, so errors do not add up from leg to leg; a FORWARD's last leg is the
@@ -24,6 +23,10 @@
 //!   short (the bumper, a stall, a push) backs off over the places its way passed, in reverse
 //!   ([`Pilot::retrace_slide`]): the straight way back to the cell's centre would cross what the
 //!   way went round.
+//! - **Where it ends.** On the next cell's centre line across, within the band of the line
+//!   through the centres; when no such place clears, within the band of the centre, short of it
+//!   or past it ([`crate::motor::Motor::start_next_cell_at`]): the odometry then holds the
+//!   body off the centre, and the next command starts from there.
 //! - **What Cute hears.** Nothing new: a FORWARD made, or refused as before; a turn made or not.
 
 use std::collections::VecDeque;
@@ -43,6 +46,8 @@ pub(super) struct Sliding {
     legs: VecDeque<(f64, f64)>,
     /// The track of a FORWARD's last leg, left of the line through the centres.
     track_left_m: f64,
+    /// Where a FORWARD's last leg stops, ahead of the next cell's centre.
+    stop_along_m: f64,
     /// Where the body stood when the running FORWARD's sliding way began and at the end of each
     /// leg since: a back-off retraces them ([`Pilot::retrace_slide`]).
     visited: Vec<(f64, f64)>,
@@ -61,6 +66,7 @@ impl Pilot {
     /// The floor plan given is complete ([`crate::Carto::add_floor_plan`]).
     pub fn know_free_space(&mut self) {
         self.sliding.free_space_known = true;
+        self.echoes.plan_is_complete();
     }
 
     /// Whether a complete floor plan was given.
@@ -109,10 +115,11 @@ impl Pilot {
 
     /// Starts the sliding way `way` of a FORWARD.
     pub(super) fn start_slide(&mut self, io: &mut Io<'_>, way: slide::Slide) {
-        tracing::info!(legs = ?way.legs, track_left_m = way.track_left_m, "FORWARD by a sliding way through its two cells");
+        tracing::info!(legs = ?way.legs, track_left_m = way.track_left_m, stop_along_m = way.stop_along_m, "FORWARD by a sliding way through its two cells");
         self.counters.forwards_slid += 1;
         self.sliding.legs = way.legs.into();
         self.sliding.track_left_m = way.track_left_m;
+        self.sliding.stop_along_m = way.stop_along_m;
         let off = io.motor.odometry().offset();
         self.sliding.visited = vec![(off.along_m, off.left_m)];
         self.next_leg(io, io.now, None);
@@ -134,7 +141,8 @@ impl Pilot {
                 return self.start_turn(io, mv);
             }
             self.forward.start(io, None);
-            return match io.motor.start_next_cell_on(io.now, self.sliding.track_left_m, io.sensors) {
+            let (track, stop) = (self.sliding.track_left_m, self.sliding.stop_along_m);
+            return match io.motor.start_next_cell_at(io.now, track, stop, io.sensors) {
                 // the FORWARD's watches start with its drive, not with the legs before it
                 Ok(_) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },
                 Err(e) => self.fail(io.now, &e.to_string()),
