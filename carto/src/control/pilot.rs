@@ -51,7 +51,7 @@
 //! into another's: `tasks.rs` (the task queue and the partial batch), `localisation.rs` (the
 //! stored pose and the belief around it), `echoes.rs` (the echo points the safety checks ask),
 //! `forward.rs` (the watches of a running FORWARD) and `sliding.rs` (local motion: the legs of
-//! a sliding way, and whether free space is known). The pilot itself holds the stage machine
+//! a sliding way). The pilot itself holds the stage machine
 //! (`stage.rs`) and sequences the parts: requests and link events (`session.rs`), starting a
 //! command (`commands.rs`), the scan, corridor and turn checks (`safety.rs`), a FORWARD stopped
 //! short (`stopped.rs`). Every step of a

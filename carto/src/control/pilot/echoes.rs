@@ -64,6 +64,12 @@ impl Echoes {
         self.moving.clear();
     }
 
+    /// Whether a complete floor plan is held ([`Echoes::plan_is_complete`]): space without a
+    /// point is known free.
+    pub(super) fn has_complete_plan(&self) -> bool {
+        self.plan_complete
+    }
+
     /// Every echo point held, in the grid's metric frame: those kept at rest and those heard
     /// moving (not the floor plan).
     pub(super) fn points(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
@@ -100,11 +106,11 @@ impl Echoes {
     /// Keeps a reading taken at rest from `robot`: the echo `cm` from the sonar as a point
     /// (`None`: no echo), and clears the points it saw through and those under the body.
     pub(super) fn note_at_rest(&mut self, robot: Pose2, cm: Option<f32>) {
-        let s = self.safety;
-        let range = cm.map(|cm| f64::from(cm) / 100.0);
         if self.plan_complete {
             return;
         }
+        let s = self.safety;
+        let range = cm.map(|cm| f64::from(cm) / 100.0);
         self.at_rest.clear_footprint(robot, s.half_length_m, s.half_width_m);
         self.at_rest.add_reading(robot, s.mount_m, range, s.half_cone_deg, s.max_range_m);
         self.moving.clear_footprint(robot, s.half_length_m, s.half_width_m);

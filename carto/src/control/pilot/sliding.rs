@@ -37,11 +37,9 @@ use robot_model::time::Instant;
 use super::{Io, Pilot, Stage};
 use crate::slide::{self, SlideGeometry};
 
-/// The sliding way of the running command, and what the pilot knows of free space.
+/// The sliding way of the running command.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Sliding {
-    /// A complete floor plan was given: space without a point is free.
-    free_space_known: bool,
     /// The points still to slide to, from the stored cell's centre.
     legs: VecDeque<(f64, f64)>,
     /// The track of a FORWARD's last leg, left of the line through the centres.
@@ -65,13 +63,12 @@ impl Sliding {
 impl Pilot {
     /// The floor plan given is complete ([`crate::Carto::add_floor_plan`]).
     pub fn know_free_space(&mut self) {
-        self.sliding.free_space_known = true;
         self.echoes.plan_is_complete();
     }
 
     /// Whether a complete floor plan was given.
     pub(super) fn free_space_known(&self) -> bool {
-        self.sliding.free_space_known
+        self.echoes.has_complete_plan()
     }
 
     /// Plans with `plan` from where the robot believes it stands in its stored cell, over the
@@ -88,7 +85,7 @@ impl Pilot {
             &dyn Fn((f64, f64), (f64, f64)) -> bool,
         ) -> Option<T>,
     ) -> Option<T> {
-        if !self.sliding.free_space_known {
+        if !self.free_space_known() {
             return None;
         }
         let s = self.safety;
