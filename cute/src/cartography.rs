@@ -9,9 +9,11 @@
 //! cell becomes free) or met an obstacle (the cell ahead becomes 0).
 //!
 //! Detours ("follow the obstacle's contour by the shortest way, preferring cells already mapped,
-//! aiming at the next cell of the route"): when the target is not adjacent, or the planned next
-//! cell turns out blocked, A* ([`crate::astar`], fast order) plans from the robot to the target
-//! over known free cells (cost 1) **and unknown cells at a higher cost** ([`DEFAULT_UNKNOWN_COST`]).
+//! aiming at the next cell of the route"): when the target is not adjacent (or is, but no turn
+//! towards it is left here), or the planned next cell turns out blocked, A* plans from the
+//! robot's cell and heading to the target over known free cells (cost 1) **and unknown cells at
+//! a higher cost** ([`DEFAULT_UNKNOWN_COST`]), with a cost for each quarter turn and without the
+//! turns seen failing (`cartography/reach.rs`).
 //! Unknown cells on the way are probed by driving into them, which maps them too; a bump
 //! triggers a new plan. We chose one weighted search over "known cells first, then fall back"
 //! because it gives the same path whenever a known detour is nearly as short, and explores
@@ -39,8 +41,9 @@
 //! MOVE_DONE alone, as a turn it made. The next FORWARD's reply shows the heading the robot really
 //! has (a FORWARD refused twice after a turn, when the old heading faces the grid's edge, shows it
 //! too),
-//! and that turn from that cell and heading is remembered as failed: the cartographer turns the
-//! other way round there, drives out straight ahead when no turn is left (at most
+//! and that turn from that cell and heading is remembered as failed: detours plan round it (the
+//! robot drives on to a cell where it can turn), the cartographer turns the other way round
+//! there, drives out straight ahead when no turn is left (at most
 //! [`MAX_ESCAPES_PER_CELL`] times per cell), and otherwise gives the target up as unreachable, so
 //! a robot that cannot turn ends the sweep instead of asking the same turn until the time limit.
 //!
@@ -71,7 +74,7 @@
 use thiserror::Error;
 use tracing::{debug, warn};
 
-use crate::astar::{AStar, Grid};
+use crate::astar::Grid;
 use crate::map::{CellValue, MAX_SIDE, Map, Refusal};
 use robot_model::grid::{Heading, Move};
 
@@ -186,13 +189,10 @@ pub struct Cartographer {
     /// Remaining cells of the current plan, next cell last.
     plan: Vec<(u8, u8)>,
     pending: Option<Move>,
-    astar: AStar,
     grid: Grid,
     unknown_cost: u8,
     done: bool,
     stats: CartoStats,
-    flood_seen: Vec<bool>,
-    flood_stack: Vec<(u8, u8)>,
     /// The turns taken as made since the last FORWARD's reply: (heading before, turn).
     unconfirmed_turns: Vec<(Heading, Move)>,
     /// Bare MOVE_DONEs to a FORWARD since the last reply or turn.
@@ -232,13 +232,10 @@ impl Cartographer {
             target: None,
             plan: Vec::new(),
             pending: None,
-            astar: AStar::new(),
             grid,
             unknown_cost: DEFAULT_UNKNOWN_COST,
             done: false,
             stats: CartoStats::default(),
-            flood_seen: vec![false; rows * cols],
-            flood_stack: Vec::new(),
             unconfirmed_turns: Vec::new(),
             refused_forwards: 0,
             failed_turns: Vec::new(),
@@ -375,7 +372,9 @@ impl Cartographer {
             };
             if stale {
                 self.plan.clear();
-                if self.can_step(map, target) {
+                let turnable =
+                    Heading::between(self.pose, target).is_some_and(|h| self.turn_towards(h).is_some());
+                if self.can_step(map, target) && turnable {
                     self.plan.push(target);
                 } else if !self.plan_detour(map, target) {
                     self.mark_unreachable(map, target);

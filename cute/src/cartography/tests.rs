@@ -263,3 +263,45 @@ fn a_move_reply_sets_the_heading_to_the_direction_travelled() {
     c.on_result(&mut map, MoveResult::Blocked { x: 1, y: 0 });
     assert_eq!(c.stats().heading_resyncs, 1);
 }
+
+/// Generated flat seed 11: the robot cannot turn in two cells of a corridor, and the cells
+/// behind it are reached by driving on to a cell where it can turn round. A search over cells
+/// alone planned through a turn that fails, and the sweep gave those cells up. The detour is
+/// planned over (cell, heading), without the turns seen failing, and none of them is asked.
+#[test]
+fn cells_behind_a_corridor_without_turns_are_reached_by_turning_elsewhere() {
+    // 4 x 2: column 1 stood in, (0, 0) and (1, 0) obstacles, (2, 0) and (3, 0) unknown; the
+    // robot in (1, 1) facing NORTH; no turn is possible in (1, 1) nor in (2, 1)
+    let mut map = Map::new(4, 2).unwrap();
+    for x in 0..4 {
+        map.set_free(x, 1).unwrap();
+    }
+    map.set_obstacle(0, 0).unwrap();
+    map.set_obstacle(1, 0).unwrap();
+    map.set_robot(1, 1).unwrap();
+    let mut c = Cartographer::new(4, 2, (1, 1), Heading::North).unwrap();
+    for cell in [(1, 1), (2, 1)] {
+        for heading in Heading::ALL {
+            for turn in [Move::Left, Move::Right] {
+                c.failed_turns.push((cell, heading, turn));
+            }
+        }
+    }
+    let mut forwards = Vec::new();
+    while let Some(cmd) = c.next_command(&map) {
+        assert!(forwards.len() < 30, "no end: {forwards:?}");
+        let result = if cmd.is_turn() {
+            assert!(!c.turn_failed(c.pose(), c.heading(), cmd), "{cmd:?} asked where it failed");
+            MoveResult::Turned
+        } else {
+            let ahead = c.heading().step(c.pose(), 4, 2).unwrap();
+            forwards.push(ahead);
+            MoveResult::Moved { x: ahead.0, y: ahead.1 }
+        };
+        c.on_result(&mut map, result);
+    }
+    assert!(c.unreachable_cells().is_empty(), "{:?}", c.unreachable_cells());
+    assert!([(2, 0), (3, 0)].iter().all(|&cell| map.at(cell).is_some_and(|v| v.is_known_free())));
+    // on to (0, 1) to turn round, down to (3, 1), west, then north
+    assert_eq!(forwards, [(0, 1), (1, 1), (2, 1), (3, 1), (3, 0), (2, 0)]);
+}
