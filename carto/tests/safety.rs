@@ -277,6 +277,37 @@ fn a_bump_after_sliding_round_a_leg_backs_off_the_way_the_body_came() {
     assert!(h.robot.x.hypot(h.robot.y) <= 0.03, "ended at ({:.3}, {:.3})", h.robot.x, h.robot.y);
 }
 
+/// An echo 44 cm ahead of the sonar (one cell's threshold is 45 cm) from a leg on the line,
+/// 57 cm from the centre: the body at the next centre would reach 58 cm. The FORWARD is refused
+/// either way; without a floor plan the cell ahead is reported occupied, while a floor plan that
+/// holds the leg has the body fit in that cell 2 cm short of its centre, so only the way is
+/// reported blocked, and Cute keeps the cell to reach another way.
+#[test]
+fn with_a_floor_plan_a_refusal_reports_the_cell_ahead_occupied_only_when_the_body_cannot_fit_there() {
+    let leg = (5.0 * 0.45 + 0.57, -5.0 * 0.45);
+    for plan in [true, false] {
+        let mut h = ready_with(fake::test_config_with(|c| {
+            c.cell_size_m = 0.45;
+            c.safety.obstacle_threshold_cm = 45.0;
+        }));
+        h.robot.distance_cm = 44.0;
+        h.run_ms(150);
+        if plan {
+            h.carto.add_floor_plan([leg]);
+        } else {
+            h.carto.add_known_surfaces([leg]);
+        }
+        h.send(cartography(Command::Forward));
+        assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE (plan: {plan})");
+        assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove (plan: {plan})");
+        if plan {
+            assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
+        } else {
+            assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+        }
+    }
+}
+
 const WAY_EAST_NOT_CLEAR: [GuiMessage; 3] = [
     GuiMessage::SetObstaclePosition { x: 5, y: 6 },
     GuiMessage::SetRobotPosition { x: 5, y: 5 },

@@ -327,7 +327,13 @@ impl Pilot {
                                 self.localise(io, Some(cm));
                             }
                             self.note_reading(io, Some(cm));
-                            self.report_obstacle();
+                            // a floor plan that has the body fit in the cell ahead says the echo
+                            // blocks the way there, not the cell
+                            if self.fits_in_cell_ahead() == Some(true) && !io.sensors.bumper_pressed() {
+                                self.report_way_not_clear();
+                            } else {
+                                self.report_obstacle();
+                            }
                             self.end_task(io.now);
                         }
                         Check::Clear { cm } => {
@@ -517,7 +523,7 @@ impl Pilot {
     /// with the cell ahead, followed by SET_ROBOT_POSITION with the cell the robot stays in:
     /// the move is blocked, but nothing says the cell ahead is occupied, so Cute keeps it unknown
     /// and may reach it another way (`protocol/README.md`, "Refused FORWARD").
-    fn report_way_not_clear(&mut self) {
+    pub(super) fn report_way_not_clear(&mut self) {
         self.report_obstacle();
         if let Some(p) = self.place.pose() {
             self.replies.push(Reply::RobotPosition { x: p.x, y: p.y });

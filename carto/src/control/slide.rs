@@ -73,6 +73,8 @@ pub struct SlideGeometry {
     pub band_m: f64,
     /// The radius of the circle the body sweeps turning on the spot, plus the clearance, metres.
     pub turn_clear_m: f64,
+    /// How far from a cell's centre a command may leave the body, metres.
+    pub stop_within_m: f64,
 }
 
 impl SlideGeometry {
@@ -87,6 +89,7 @@ impl SlideGeometry {
             clearance_m: cfg.safety.clearance_m,
             band_m: (cfg.safety.stop_within_m - cfg.motion.lateral_tolerance_m).max(0.0),
             turn_clear_m: cfg.turn_radius_m() + cfg.safety.clearance_m,
+            stop_within_m: cfg.safety.stop_within_m,
         }
     }
 }
@@ -208,6 +211,22 @@ pub fn plan_turn(
         search(&lattice, from, |node| circle_gap(node) > lattice.step * std::f64::consts::FRAC_1_SQRT_2)
     })?;
     Some(into_legs(&lattice, start, &path, false).legs)
+}
+
+/// Whether the body, facing the heading and grown by `keep_m`, holds none of `points`
+/// (`(along, left)` from A's centre) somewhere within [`SlideGeometry::stop_within_m`] of
+/// `centre`, searched at the lattice spacing: the body fits in the cell there. A FORWARD
+/// refused into a cell where the body itself fits was refused for its way, not for the cell.
+pub fn fits_near(g: &SlideGeometry, centre: (f64, f64), keep_m: f64, points: &[(f64, f64)]) -> bool {
+    let (reach_along, reach_left) = (g.half_length_m + keep_m, g.half_width_m + keep_m);
+    let steps = (g.stop_within_m / STEP_M).floor() as i32;
+    (-steps..=steps)
+        .flat_map(|i| (-steps..=steps).map(move |j| (f64::from(i) * STEP_M, f64::from(j) * STEP_M)))
+        .filter(|(da, dl)| da.hypot(*dl) <= g.stop_within_m + 1e-9)
+        .any(|(da, dl)| {
+            let (a, l) = (centre.0 + da, centre.1 + dl);
+            points.iter().all(|&(pa, pl)| (pa - a).abs() > reach_along || (pl - l).abs() > reach_left)
+        })
 }
 
 impl Lattice {
@@ -519,6 +538,23 @@ mod tests {
         // nothing in the way: the FORWARD ends on the centre
         assert_eq!(plan(&g, (0.0, 0.0), &wall(-0.01), &all_free).map(|s| s.stop_along_m), Some(0.0));
         assert_eq!(plan(&g, (0.0, 0.0), &wall(0.015), &all_free), None);
+    }
+
+    /// A wall 1.5 cm inside the clearance of the body at B's centre: the body keeps the
+    /// clearance 2 cm short of the centre (within `stop_within_m`); 3 cm inside, nowhere in B.
+    #[test]
+    fn the_body_fits_in_a_cell_within_its_stop_tolerance_of_the_centre() {
+        let g = geometry();
+        let at_centre = g.cell_m + g.half_length_m + g.clearance_m;
+        let wall = |inside: f64| -> Vec<(f64, f64)> {
+            (-30..=30).map(|k| (at_centre - inside, f64::from(k) * 0.01)).collect()
+        };
+        let keep = g.clearance_m;
+        assert!(fits_near(&g, (g.cell_m, 0.0), keep, &[]));
+        assert!(fits_near(&g, (g.cell_m, 0.0), keep, &wall(0.015)));
+        assert!(!fits_near(&g, (g.cell_m, 0.0), keep, &wall(0.03)));
+        // the body itself, keeping nothing, fits 3 cm inside the clearance
+        assert!(fits_near(&g, (g.cell_m, 0.0), 0.0, &wall(0.03)));
     }
 
     /// A wall across the way, 40 cm ahead, from 30 cm right to 30 cm left: no way round inside

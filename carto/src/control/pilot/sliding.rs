@@ -100,6 +100,20 @@ impl Pilot {
         plan(&s.slide, (off.along_m, off.left_m), &points, &|_, _| true)
     }
 
+    /// Whether, by a complete floor plan, the body itself fits in the cell ahead (within the stop
+    /// tolerance of its centre, [`slide::fits_near`], keeping no clearance: what the cell is, not
+    /// how near the robot may go); `None` without one.
+    pub(super) fn fits_in_cell_ahead(&self) -> Option<bool> {
+        if !self.echoes.has_complete_plan() {
+            return None;
+        }
+        let g = self.safety.slide;
+        let frame = self.place.cell_frame()?;
+        let reach = g.stop_within_m + g.half_length_m.max(g.half_width_m);
+        let points = self.echoes.in_box(frame, (g.cell_m - reach, g.cell_m + reach), (-reach, reach), true);
+        Some(slide::fits_near(&g, (g.cell_m, 0.0), 0.0, &points))
+    }
+
     /// A sliding way for the FORWARD from where the robot believes it stands, or `None`.
     pub(super) fn slide_way(&self, io: &Io<'_>) -> Option<slide::Slide> {
         self.plan_slide(io, false, slide::plan)
