@@ -303,7 +303,10 @@ fn with_a_floor_plan_a_refusal_reports_the_cell_ahead_occupied_only_when_the_bod
         if plan {
             assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
         } else {
-            assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
+            assert_eq!(
+                h.reply_msgs(),
+                vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]
+            );
         }
     }
 }
