@@ -25,8 +25,11 @@
 //!   sliding way through its two cells (`pilot/sliding.rs`, [`crate::slide`]). When none exists
 //!   either, the answer says what the point is evidence of. A point inside the body standing at
 //!   the next centre makes the cell ahead occupied: `SET_OBSTACLE_POSITION`, as for a close
-//!   straight echo. A point anywhere else in the corridor (on the way, or within
-//!   the clearance beside the body) says only that the way is not clear:
+//!   straight echo. With a complete floor plan the cell is occupied only when the body itself
+//!   cannot stand in it within [`Safety::stop_within_m`](crate::config::Safety::stop_within_m)
+//!   of its centre ([`crate::slide::fits_near`], keeping no clearance), whatever was met, a close
+//!   straight echo too (unless the bumper is pressed). A point anywhere else in the corridor (on
+//!   the way, or within the clearance beside the body) says only that the way is not clear:
 //!   `SET_OBSTACLE_POSITION`, then `SET_ROBOT_POSITION` with the robot's own cell, which Cute
 //!   reads as a blocked move, the cell left unknown (`protocol/README.md`, "Refused FORWARD").
 //! - **Footprint.** Before every reading at rest and every turn check, the points inside the
