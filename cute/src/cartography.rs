@@ -74,7 +74,6 @@
 use thiserror::Error;
 use tracing::{debug, warn};
 
-use crate::astar::Grid;
 use crate::map::{CellValue, MAX_SIDE, Map, Refusal};
 use robot_model::grid::{Heading, Move};
 
@@ -189,7 +188,6 @@ pub struct Cartographer {
     /// Remaining cells of the current plan, next cell last.
     plan: Vec<(u8, u8)>,
     pending: Option<Move>,
-    grid: Grid,
     unknown_cost: u8,
     done: bool,
     stats: CartoStats,
@@ -221,7 +219,6 @@ impl Cartographer {
         if usize::from(start.0) >= rows || usize::from(start.1) >= cols {
             return Err(CartoError::StartOutside { x: start.0, y: start.1, rows, cols });
         }
-        let grid = Grid::blocked(rows, cols).map_err(|_| CartoError::BadSize { rows, cols })?;
         Ok(Cartographer {
             rows,
             cols,
@@ -232,7 +229,6 @@ impl Cartographer {
             target: None,
             plan: Vec::new(),
             pending: None,
-            grid,
             unknown_cost: DEFAULT_UNKNOWN_COST,
             done: false,
             stats: CartoStats::default(),

@@ -327,12 +327,12 @@ impl Pilot {
                                 self.localise(io, Some(cm));
                             }
                             self.note_reading(io, Some(cm));
-                            // a floor plan that has the body fit in the cell ahead says the echo
-                            // blocks the way there, not the cell
-                            if self.fits_in_cell_ahead() == Some(true) && !io.sensors.bumper_pressed() {
-                                self.report_way_not_clear();
-                            } else {
+                            // a pressed bumper met the cell ahead; an echo straight ahead is
+                            // what the plan, if any, says of that cell
+                            if io.sensors.bumper_pressed() {
                                 self.report_obstacle();
+                            } else {
+                                self.report_refused_forward(true);
                             }
                             self.end_task(io.now);
                         }
@@ -523,10 +523,21 @@ impl Pilot {
     /// with the cell ahead, followed by SET_ROBOT_POSITION with the cell the robot stays in:
     /// the move is blocked, but nothing says the cell ahead is occupied, so Cute keeps it unknown
     /// and may reach it another way (`protocol/README.md`, "Refused FORWARD").
-    pub(super) fn report_way_not_clear(&mut self) {
+    fn report_way_not_clear(&mut self) {
         self.report_obstacle();
         if let Some(p) = self.place.pose() {
             self.replies.push(Reply::RobotPosition { x: p.x, y: p.y });
+        }
+    }
+
+    /// Answers a refused FORWARD: the cell ahead occupied, or only the way there not clear.
+    /// With a complete floor plan the plan decides: occupied only when the body itself cannot
+    /// stand in the cell ([`Pilot::fits_in_cell_ahead`]); without one, `occupied_without_plan`.
+    fn report_refused_forward(&mut self, occupied_without_plan: bool) {
+        if self.fits_in_cell_ahead().map_or(occupied_without_plan, |fits| !fits) {
+            self.report_obstacle();
+        } else {
+            self.report_way_not_clear();
         }
     }
 

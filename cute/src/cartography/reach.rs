@@ -17,7 +17,6 @@ use tracing::debug;
 
 use super::{Cartographer, Known};
 use crate::map::Map;
-use crate::trajectory::fill_grid;
 
 /// What a quarter turn costs, against 1 for a FORWARD into a known free cell.
 pub const TURN_COST: u32 = 1;
@@ -62,9 +61,12 @@ impl Cartographer {
         h: Heading,
     ) -> impl Iterator<Item = ((u8, u8), Heading, u32)> {
         let ahead = h.step(cell, self.rows, self.cols).and_then(|n| {
-            let cost = u32::from(self.grid.cost(usize::from(n.0), usize::from(n.1)));
-            let open = cost > 0 && !map.is_move_blocked(cell, n) && self.classify(map, n) != Known::Blocked;
-            open.then_some((n, h, cost))
+            let cost = match self.classify(map, n) {
+                Known::Blocked => return None,
+                Known::Unknown => u32::from(self.unknown_cost),
+                Known::Free => 1,
+            };
+            (!map.is_move_blocked(cell, n)).then_some((n, h, cost))
         });
         let turns = [Move::Left, Move::Right]
             .into_iter()
@@ -77,7 +79,6 @@ impl Cartographer {
     /// unknown (`unknown_cost`) cells, round the blocked moves and the turns seen failing. On
     /// success the plan holds the cells the FORWARDs enter, the next one last.
     pub(super) fn plan_detour(&mut self, map: &Map, target: (u8, u8)) -> bool {
-        fill_grid(&mut self.grid, map, self.unknown_cost);
         self.stats.searches += 1;
         let Some(start) = self.state(self.pose, self.heading) else { return false };
         let n = self.rows * self.cols * 4;
@@ -124,7 +125,6 @@ impl Cartographer {
     /// Marks every unknown cell the robot cannot reach, in any heading, by FORWARDs not refused
     /// and turns not seen failing.
     pub(super) fn mark_unreachable(&mut self, map: &Map, target: (u8, u8)) {
-        fill_grid(&mut self.grid, map, self.unknown_cost);
         let before = self.stats.unreachable;
         let mut seen = vec![false; self.rows * self.cols * 4];
         let mut stack = Vec::new();

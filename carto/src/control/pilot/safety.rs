@@ -454,21 +454,13 @@ impl Pilot {
                             "echo in the body's path: no motion"
                         );
                         self.counters.corridor_blocked += 1;
-                        // inside the body standing at the next centre, the cell is occupied;
-                        // anywhere else in the corridor only the way there is not clear
+                        // without a plan: inside the body standing at the next centre, the
+                        // cell is occupied; anywhere else in the corridor only the way there is
+                        // not clear
                         let centre_along_m = s.cell_m - off.along_m;
-                        let in_footprint = match self.fits_in_cell_ahead() {
-                            Some(fits) => !fits,
-                            None => {
-                                (hit.at.0 - centre_along_m).abs() <= s.half_length_m
-                                    && (hit.at.1 + off.left_m).abs() <= s.half_width_m
-                            }
-                        };
-                        if in_footprint {
-                            self.report_obstacle();
-                        } else {
-                            self.report_way_not_clear();
-                        }
+                        let in_footprint = (hit.at.0 - centre_along_m).abs() <= s.half_length_m
+                            && (hit.at.1 + off.left_m).abs() <= s.half_width_m;
+                        self.report_refused_forward(in_footprint);
                         return self.end_task(io.now);
                     }
                 }

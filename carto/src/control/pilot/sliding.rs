@@ -104,7 +104,7 @@ impl Pilot {
     /// tolerance of its centre, [`slide::fits_near`], keeping no clearance: what the cell is, not
     /// how near the robot may go); `None` without one.
     pub(super) fn fits_in_cell_ahead(&self) -> Option<bool> {
-        if !self.echoes.has_complete_plan() {
+        if !self.free_space_known() {
             return None;
         }
         let g = self.safety.slide;
