@@ -131,7 +131,7 @@ pub struct Pilot {
     scan_missing: bool,
     /// This FORWARD's scan is a look aside to this side (+1 left, −1 right), to correct the
     /// belief (`pilot/safety.rs`, "Looking aside").
-    looking_aside: Option<f64>,
+    looking_aside: Option<(f64, f64)>,
     /// The mapping turn that just succeeded: once its task has ended, the robot looks past it.
     look_pending: Option<Move>,
     /// Re-facings of the grid heading that failed in a row ([`Pilot::refacing_failed`]).

@@ -335,14 +335,14 @@ impl Localiser {
     /// The side to look aside to from `robot`, `deg` each way (module docs of
     /// `pilot/safety.rs`, "Looking aside"): +1 (left) or −1 (right), whichever the floor plan
     /// puts the nearer echo on, within [`LOOK_ASIDE_MAX_M`]; `None` without a plan or an echo.
-    pub fn look_aside_side(&self, robot: Pose2, deg: f64) -> Option<f64> {
+    pub fn look_aside_side(&self, robot: Pose2, deg: f64, max_m: f64) -> Option<f64> {
         let known = self.known_grid.as_ref()?;
         let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };
         [1.0, -1.0]
             .into_iter()
             .filter_map(|side: f64| {
                 let looking = Pose2 { yaw_deg: robot.yaw_deg + side * deg, ..robot };
-                expected_range(known, looking, self.mount_m, &fan, LOOK_ASIDE_MAX_M).map(|r| (r, side))
+                expected_range(known, looking, self.mount_m, &fan, max_m).map(|r| (r, side))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, side)| side)

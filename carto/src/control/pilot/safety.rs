@@ -77,8 +77,11 @@
 //!   belief may be off), no scan is configured and the turning circle holds no known echo, the
 //!   robot turns
 //!   [`LOOK_ASIDE_DEG`] towards the side where the plan puts the nearer echo (within
-//!   [`crate::estimate::localiser::LOOK_ASIDE_MAX_M`]; neither side has one: no look), takes one
-//!   reading at rest, corrects the belief from it against the plan
+//!   [`crate::estimate::localiser::LOOK_ASIDE_MAX_M`]). When neither side has one there (the
+//!   middle of an open room), it turns a quarter turn instead, towards the nearer echo within
+//!   [`QUARTER_LOOK_MAX_M`]: a surface faced square gives a range that depends on the heading
+//!   to second order only, so a far one still places the body across the row. Neither: no
+//!   look. It takes one reading at rest, corrects the belief from it against the plan
 //!   ([`crate::estimate::localiser::Localiser::at_look`]) and turns back before the corridor
 //!   check. One look, not two: one range across the row is what the belief lacks. Without a
 //!   plan there is no look: the echoes heard so far are placed from the belief being
@@ -148,6 +151,7 @@ use robot_model::time::Instant;
 use super::forward::DriveReading;
 use super::localisation::heading_deg;
 use super::{Io, Pilot, Stage};
+use crate::estimate::localiser::LOOK_ASIDE_MAX_M;
 use crate::estimate::sonar::Reading;
 use crate::surroundings::Pose2;
 
@@ -163,14 +167,17 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// How far each way a look aside turns the body, degrees: a range taken there measures the
 /// position mostly across the heading (sin 60° = 0.87 of it).
 pub(super) const LOOK_ASIDE_DEG: f64 = 60.0;
+/// With nothing within reach of a look aside, a quarter turn faces a surface up to this far:
+/// a range taken square to it depends on the heading to second order only, metres.
+pub(super) const QUARTER_LOOK_MAX_M: f64 = 3.0;
 impl Pilot {
     /// The looks before this FORWARD (the signs of each, the last back to the grid heading) and
     /// their angle: the scan's, else a look aside when one is due, else none.
     fn looks_now(&self) -> (&'static [f64], f64) {
         match (self.safety.scan_deg, self.looking_aside) {
             (deg, _) if deg > 0.0 => (self.safety.looks(), deg),
-            (_, Some(side)) if side > 0.0 => (&[1.0, 0.0], LOOK_ASIDE_DEG),
-            (_, Some(_)) => (&[-1.0, 0.0], LOOK_ASIDE_DEG),
+            (_, Some((side, deg))) if side > 0.0 => (&[1.0, 0.0], deg),
+            (_, Some((_, deg))) => (&[-1.0, 0.0], deg),
             _ => (&[], 0.0),
         }
     }
@@ -187,7 +194,11 @@ impl Pilot {
         {
             return;
         }
-        self.looking_aside = self.place.localiser().look_aside_side(robot, LOOK_ASIDE_DEG);
+        let localiser = self.place.localiser();
+        self.looking_aside = localiser
+            .look_aside_side(robot, LOOK_ASIDE_DEG, LOOK_ASIDE_MAX_M)
+            .map(|side| (side, LOOK_ASIDE_DEG))
+            .or_else(|| localiser.look_aside_side(robot, 90.0, QUARTER_LOOK_MAX_M).map(|side| (side, 90.0)));
         if self.looking_aside.is_some() {
             self.counters.looks_aside += 1;
         }

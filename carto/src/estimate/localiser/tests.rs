@@ -102,16 +102,24 @@ fn a_look_aside_corrects_across_the_heading_against_the_plan() {
 #[test]
 fn a_look_aside_turns_to_the_side_the_plan_has_the_nearer_surface_on() {
     let mut loc = Localiser::new(&CartoConfig::default());
-    assert_eq!(loc.look_aside_side(east(0.0), 60.0), None, "no plan, no look");
+    assert_eq!(loc.look_aside_side(east(0.0), 60.0, LOOK_ASIDE_MAX_M), None, "no plan, no look");
     loc.pin((-100..=100).map(|k| (f64::from(k) * 0.01, 0.5))); // left, 0.5 m
-    assert_eq!(loc.look_aside_side(east(0.0), 60.0), Some(1.0));
+    assert_eq!(loc.look_aside_side(east(0.0), 60.0, LOOK_ASIDE_MAX_M), Some(1.0));
     loc.pin((-100..=100).map(|k| (f64::from(k) * 0.01, -0.3))); // right, nearer
-    assert_eq!(loc.look_aside_side(east(0.0), 60.0), Some(-1.0));
+    assert_eq!(loc.look_aside_side(east(0.0), 60.0, LOOK_ASIDE_MAX_M), Some(-1.0));
     // nothing within reach either side (the walls 3 m away): no look
     let mut far = Localiser::new(&CartoConfig::default());
     far.pin((-100..=100).map(|k| (f64::from(k) * 0.01, 3.0)));
     far.pin((-100..=100).map(|k| (f64::from(k) * 0.01, -3.0)));
-    assert_eq!(far.look_aside_side(east(0.0), 60.0), None);
+    assert_eq!(far.look_aside_side(east(0.0), 60.0, LOOK_ASIDE_MAX_M), None);
+    // a quarter turn faces a surface farther off, within the sonar's reach
+    let mut open = Localiser::new(&CartoConfig::default());
+    open.pin((-100..=100).map(|k| (f64::from(k) * 0.01, 2.5))); // left, 2.5 m
+    assert_eq!(open.look_aside_side(east(0.0), 60.0, LOOK_ASIDE_MAX_M), None);
+    assert_eq!(open.look_aside_side(east(0.0), 90.0, 3.0), Some(1.0));
+    open.pin((-100..=100).map(|k| (f64::from(k) * 0.01, -2.2))); // right, nearer
+    assert_eq!(open.look_aside_side(east(0.0), 90.0, 3.0), Some(-1.0));
+    assert_eq!(far.look_aside_side(east(0.0), 90.0, 2.0), None, "beyond its reach: no look");
 }
 
 #[test]
