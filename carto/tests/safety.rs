@@ -1081,3 +1081,32 @@ fn with_a_floor_plan_the_uncertainty_across_the_row_sends_a_look_towards_the_wal
     assert_eq!(looks, 0);
     assert!(left < 5.0 && right < 5.0, "turned {left:.0}° left, {right:.0}° right");
 }
+
+/// The largest heading, clockwise from east, in the 3 s after a mapping RIGHT from EAST has
+/// answered `MOVE_DONE`; with a complete floor plan (a far point) or without one.
+fn heading_after_a_right(plan: bool) -> f32 {
+    let mut h = ready_with(CartoConfig::default());
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    if plan {
+        h.carto.add_floor_plan([(5.0, 5.0)]);
+    }
+    h.send(cartography(Command::Right));
+    assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the turn");
+    let mut most = f32::MIN;
+    for _ in 0..3000 {
+        most = most.max(h.robot.heading_cw_deg());
+        h.run_ms(1);
+    }
+    most
+}
+
+#[test]
+fn with_a_complete_floor_plan_the_robot_does_not_look_past_a_mapping_turn() {
+    // the look past the turn goes on 20° past SOUTH (90° clockwise) and back; with the plan a
+    // reading there would add no point, so the robot stays facing SOUTH
+    let without = heading_after_a_right(false);
+    assert!(without > 105.0, "no look past the turn without a plan: {without}°");
+    let with = heading_after_a_right(true);
+    assert!(with < 95.0, "a look past the turn with a complete plan: {with}°");
+}

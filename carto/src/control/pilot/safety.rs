@@ -115,7 +115,9 @@
 //!   almost nothing new: turning 90° on the spot, its four corners have just swept the whole
 //!   turning circle's rim but for two arcs of 5°. Trajectory batches do not look: their one
 //!   `MOVE_DONE` ends the batch, so after a STOP Cute cannot tell which of its turns were made,
-//!   and a look would make a STOP land before the batch's first position more often.
+//!   and a look would make a STOP land before the batch's first position more often. With a
+//!   complete floor plan there is no look either: a reading adds no point then (the plan holds
+//!   every surface), so the look would only cost its time.
 //! - **Readings while driving.** The sonar keeps measuring while a FORWARD drives, and from
 //!   farther back its cone is wider: 24 cm across at 0.9 m, about the body's width, against
 //!   12 cm at 0.45 m, from the next cell's centre. Every echo heard while a FORWARD drives, no
@@ -268,12 +270,16 @@ impl Pilot {
     }
 
     /// Whether the robot should look past the mapping turn that just succeeded (module docs,
-    /// "Readings in turns"): on, with a pose, and in a mapping task. A trajectory's one
+    /// "Readings in turns"): on, with a pose, in a mapping task, and without a complete floor
+    /// plan. A trajectory's one
     /// `MOVE_DONE` ends the whole batch, so after a STOP in it Cute cannot tell which turns were
     /// made; a look would make a STOP land before the batch's first position more often.
     pub(super) fn look_wanted(&self) -> bool {
         let s = self.safety;
-        s.look_past_deg > 0.0 && self.place.pose().is_some() && self.tasks.mapping()
+        s.look_past_deg > 0.0
+            && self.place.pose().is_some()
+            && self.tasks.mapping()
+            && !self.free_space_known()
     }
 
     /// After the mapping turn `turn` and its `MOVE_DONE`: turns on past the new heading, the way
