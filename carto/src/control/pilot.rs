@@ -129,8 +129,8 @@ pub struct Pilot {
     rest_since: Instant,
     /// A reading of the running scan never came.
     scan_missing: bool,
-    /// This FORWARD's scan is a look aside to this side (+1 left, −1 right), to correct the
-    /// belief (`pilot/safety.rs`, "Looking aside").
+    /// This FORWARD's scan is a look aside to this side (+1 left, −1 right) by this many
+    /// degrees, to correct the belief (`pilot/safety.rs`, "Looking aside").
     looking_aside: Option<(f64, f64)>,
     /// The mapping turn that just succeeded: once its task has ended, the robot looks past it.
     look_pending: Option<Move>,

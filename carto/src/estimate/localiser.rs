@@ -334,7 +334,8 @@ impl Localiser {
 
     /// The side to look aside to from `robot`, `deg` each way (module docs of
     /// `pilot/safety.rs`, "Looking aside"): +1 (left) or −1 (right), whichever the floor plan
-    /// puts the nearer echo on, within [`LOOK_ASIDE_MAX_M`]; `None` without a plan or an echo.
+    /// puts the nearer echo on, within `max_m` ([`LOOK_ASIDE_MAX_M`] for the 60° look); `None`
+    /// without a plan or an echo.
     pub fn look_aside_side(&self, robot: Pose2, deg: f64, max_m: f64) -> Option<f64> {
         let known = self.known_grid.as_ref()?;
         let fan = Fan { ray_offsets_deg: &self.fan_deg, incidence_limit_deg: self.incidence_limit_deg };

@@ -24,11 +24,6 @@ pub const TURN_COST: u32 = 1;
 /// No parent: the start state.
 const NONE: u32 = u32::MAX;
 
-/// The heading's index in [`Heading::ALL`].
-fn heading_index(h: Heading) -> usize {
-    Heading::ALL.iter().position(|&a| a == h).unwrap_or(0)
-}
-
 impl Cartographer {
     /// Marks `target` unreachable: the robot cannot get there from where it is.
     pub(super) fn give_up(&mut self, target: (u8, u8)) {
@@ -43,7 +38,8 @@ impl Cartographer {
     }
 
     fn state(&self, cell: (u8, u8), h: Heading) -> Option<usize> {
-        Some(self.index(cell)? * 4 + heading_index(h))
+        // `Heading::ALL` is in wire order: a heading's wire value is its index there
+        Some(self.index(cell)? * 4 + usize::from(h.as_u8()))
     }
 
     fn cell_of(&self, state: usize) -> ((u8, u8), Heading) {

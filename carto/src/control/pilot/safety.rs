@@ -169,8 +169,11 @@ pub(super) const TURN_READING_WINDOW_DEG: f64 = 20.0;
 /// How far each way a look aside turns the body, degrees: a range taken there measures the
 /// position mostly across the heading (sin 60° = 0.87 of it).
 pub(super) const LOOK_ASIDE_DEG: f64 = 60.0;
-/// With nothing within reach of a look aside, a quarter turn faces a surface up to this far:
-/// a range taken square to it depends on the heading to second order only, metres.
+/// With nothing within reach of a look aside, the body turns this far instead, degrees: a
+/// quarter turn, square to the surfaces along the row.
+pub(super) const QUARTER_LOOK_DEG: f64 = 90.0;
+/// A quarter look faces a surface up to this far: a range taken square to it depends on the
+/// heading to second order only, metres.
 pub(super) const QUARTER_LOOK_MAX_M: f64 = 3.0;
 impl Pilot {
     /// The looks before this FORWARD (the signs of each, the last back to the grid heading) and
@@ -200,7 +203,11 @@ impl Pilot {
         self.looking_aside = localiser
             .look_aside_side(robot, LOOK_ASIDE_DEG, LOOK_ASIDE_MAX_M)
             .map(|side| (side, LOOK_ASIDE_DEG))
-            .or_else(|| localiser.look_aside_side(robot, 90.0, QUARTER_LOOK_MAX_M).map(|side| (side, 90.0)));
+            .or_else(|| {
+                localiser
+                    .look_aside_side(robot, QUARTER_LOOK_DEG, QUARTER_LOOK_MAX_M)
+                    .map(|side| (side, QUARTER_LOOK_DEG))
+            });
         if self.looking_aside.is_some() {
             self.counters.looks_aside += 1;
         }
