@@ -49,7 +49,7 @@ fn main() {
             }
             (px, py) = (t.x, t.y);
         }
-        failed += t.rt.carto().stats().moves_failed as usize;
+        failed += t.rt.carto().stats().pilot.moves_failed as usize;
     }
     let stats = |v: &[f64]| {
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;

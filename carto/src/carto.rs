@@ -43,7 +43,7 @@ use crate::CartoConfig;
 use crate::calibration::CalibrationDrive;
 use crate::log_limited;
 use crate::motor::{Drive, Motor};
-use crate::pilot::{Health, Io, Pilot, Request};
+use crate::pilot::{Health, Io, Pilot, PilotCounters, Request};
 use crate::ratelimit::{RateLimiter, host_of, log_suppressed};
 use crate::sensors::{LineTimer, PeerEvent, SensorEvent, SensorState};
 use crate::ultrasound::Ultrasound;
@@ -67,40 +67,8 @@ pub struct CartoStats {
     pub unknown_messages: u64,
     /// Moves asked for while a board link was down, dropped without `MOVE_DONE`.
     pub moves_refused: u64,
-    /// Moves completed within tolerance.
-    pub moves_done: u64,
-    /// Moves that could not run or failed.
-    pub moves_failed: u64,
-    /// Obstacles found (ultrasound or bumper).
-    pub obstacles: u64,
-    /// Bumper hits during a FORWARD.
-    pub bumps: u64,
-    /// FORWARDs refused because a known echo lay in the body's path.
-    pub corridor_blocked: u64,
-    /// FORWARDs driven on a track beside the line through the centres, clear of a known echo.
-    pub forwards_aside: u64,
-    /// FORWARDs driven by a sliding way through their two cells (`control/pilot/sliding.rs`).
-    pub forwards_slid: u64,
-    /// Turns that drove back or forth first to clear a known echo.
-    pub turns_shifted: u64,
-    /// Turns made off the centre that drove back to it before their `MOVE_DONE`.
-    pub turns_recentred: u64,
-    /// Turns refused: no shift cleared the known echoes.
-    pub turns_refused: u64,
-    /// Turns that failed (any move error) whose turn back to their start heading was started.
-    pub turns_undone: u64,
-    /// Readings at rest that corrected the belief (`estimate/localiser.rs`).
-    pub pose_fixes: u64,
-    /// Looks aside taken to correct the belief against a floor plan.
-    pub looks_aside: u64,
-    /// Sonar readings kept while a turn ran (near its end, close echoes only).
-    pub turn_readings: u64,
-    /// Sonar readings kept while a FORWARD drove.
-    pub drive_readings: u64,
-    /// FORWARDs stopped because the range held while the wheels drove.
-    pub stalls: u64,
-    /// FORWARDs stopped because the IMU saw the body turned under its wheels.
-    pub pushes: u64,
+    /// What the pilot counted: moves, refusals, shifts, looks, readings kept, stops.
+    pub pilot: PilotCounters,
     /// Jumps of the gap between the IMU's and the wheels' headings (slip, or a push), each of
     /// which re-anchored the IMU drift estimate ([`crate::sensors::SensorState::estimate_imu_drift`]).
     pub heading_jumps: u64,

@@ -54,7 +54,10 @@ fn a_turn_beside_a_wall_ahead_backs_off_first_and_drives_back_to_the_centre_befo
     h.send(cartography(Command::Right));
     let back = run_to_move_done_tracking(&mut h, 2, |h| x0 - h.robot.x);
     let stats = h.carto.stats();
-    assert_eq!((stats.turns_shifted, stats.turns_refused, stats.turns_recentred), (1, 0, 1));
+    assert_eq!(
+        (stats.pilot.turns_shifted, stats.pilot.turns_refused, stats.pilot.turns_recentred),
+        (1, 0, 1)
+    );
     // it backed off (west, -x) far enough that the circle clears the echo, turned there, and
     // was back at the centre when the MOVE_DONE went out
     assert!((0.03..=0.06).contains(&back), "backed off {back:.3} m");
@@ -88,7 +91,7 @@ fn after_a_turn_on_the_spot_the_shift_before_the_next_turn_goes_back_the_way_the
         }
     }
     assert_eq!(h.move_done_count(), 4, "no MOVE_DONE for the second RIGHT");
-    assert_eq!(h.carto.stats().turns_shifted, 1, "{:?}", h.carto.stats());
+    assert_eq!(h.carto.stats().pilot.turns_shifted, 1, "{:?}", h.carto.stats());
     // north of the body, behind its new heading, no reading ever looked: it stays where it was;
     // west, along the row it drove, it shifts until the circle clears the wall
     assert!(north <= 0.005, "shifted {north:.3} m north, behind the heading it turned to");
@@ -115,7 +118,7 @@ fn a_turn_made_off_the_centre_drives_back_only_as_far_as_a_known_surface_allows(
     let back = run_to_move_done_tracking(&mut h, 1, |h| x0 - h.robot.x);
     assert!((0.09..=0.11).contains(&back), "backed off {back:.3} m");
     let stats = h.carto.stats();
-    assert_eq!((stats.turns_shifted, stats.turns_recentred), (1, 1));
+    assert_eq!((stats.pilot.turns_shifted, stats.pilot.turns_recentred), (1, 1));
     let west = x0 - h.robot.x;
     assert!((0.03..=0.05).contains(&west), "stands {west:.3} m west of the centre");
     assert!((h.robot.yaw.to_degrees() + 90.0).abs() <= 2.0, "yaw {:.1}", h.robot.yaw.to_degrees());
@@ -136,7 +139,7 @@ fn a_turn_between_two_close_walls_is_refused() {
     let yaw = h.robot.yaw;
     h.send(cartography(Command::Left));
     assert!(h.run_until(8000, |h| h.move_done_count() == 5));
-    assert_eq!(h.carto.stats().turns_refused, 1, "{:?}", h.carto.stats());
+    assert_eq!(h.carto.stats().pilot.turns_refused, 1, "{:?}", h.carto.stats());
     assert!((h.robot.yaw - yaw).abs() < 0.02, "the robot turned although it refused");
     assert_eq!(h.reply_msgs().last(), Some(&GuiMessage::MoveDone));
 }
@@ -159,7 +162,7 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
         GuiMessage::MoveDone,
     ];
     assert_eq!(h.reply_msgs(), refused);
-    assert_eq!(h.carto.stats().corridor_blocked, 1);
+    assert_eq!(h.carto.stats().pilot.corridor_blocked, 1);
     assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
     assert!(h.robot.yaw.to_degrees().abs() <= 2.5, "left facing {:.1} deg", h.robot.yaw.to_degrees());
 }
@@ -204,7 +207,7 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     }
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     let stats = h.carto.stats();
-    assert_eq!((stats.forwards_slid, stats.corridor_blocked), (1, 0));
+    assert_eq!((stats.pilot.forwards_slid, stats.pilot.corridor_blocked), (1, 0));
     // slid right, passed the leg keeping (nearly) the clearance, and ended near the line at the
     // next centre
     assert!(rightmost <= -0.025, "slid only {rightmost:.3} m right");
@@ -220,14 +223,14 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     h.send(cartography(Command::Forward));
     assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
     assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
-    assert_eq!(h.carto.stats().forwards_slid, 0);
+    assert_eq!(h.carto.stats().pilot.forwards_slid, 0);
     assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
     // control, 0.45 m cells, the leg known but no floor plan and nothing heard beside the line:
     // the space the slide would cross is not known free
     let mut h = forward_past_a_leg(false);
     assert!(h.run_until(20000, |h| h.move_done_count() == 1), "no MOVE_DONE");
     assert_eq!(h.reply_msgs(), WAY_EAST_NOT_CLEAR);
-    assert_eq!(h.carto.stats().forwards_slid, 0);
+    assert_eq!(h.carto.stats().pilot.forwards_slid, 0);
 }
 
 #[test]
@@ -335,7 +338,7 @@ fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
     let h = forward(0.02);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     let stats = h.carto.stats();
-    assert_eq!((stats.forwards_aside, stats.corridor_blocked), (1, 0));
+    assert_eq!((stats.pilot.forwards_aside, stats.pilot.corridor_blocked), (1, 0));
     assert!((h.robot.x - 0.30).abs() <= 0.015, "drove {:.3} m", h.robot.x);
     assert!((-0.0175..=0.0).contains(&h.robot.y), "ended {:.4} m left of the line", h.robot.y);
     // with no room off the centre it is refused, as before
@@ -346,7 +349,7 @@ fn a_forward_with_an_echo_just_inside_the_clearance_drives_on_a_track_aside() {
         GuiMessage::MoveDone,
     ];
     assert_eq!(h.reply_msgs(), refused);
-    assert_eq!(h.carto.stats().corridor_blocked, 1);
+    assert_eq!(h.carto.stats().pilot.corridor_blocked, 1);
     assert!(h.distance_from(0.0, 0.0) < 0.01, "the robot drove");
 }
 
@@ -379,7 +382,7 @@ fn forwards_towards_a_wall(wall_m: f64, error_cm: &[f32]) -> (Vec<f64>, u64) {
         assert!(h.run_until(8000, |h| h.move_done_count() == i + 1), "FORWARD {i}");
         driven.push(h.robot.x - start);
     }
-    (driven, h.carto.stats().pose_fixes)
+    (driven, h.carto.stats().pilot.pose_fixes)
 }
 
 #[test]
@@ -444,7 +447,7 @@ fn forward_after_a_turn(
     h.robot.distance_cm = -1.0;
     h.run_ms(150);
     turn_hearing(&mut h, turn, cm, while_deg);
-    (forward_without_echo(&mut h), h.carto.stats().turn_readings)
+    (forward_without_echo(&mut h), h.carto.stats().pilot.turn_readings)
 }
 
 const BLOCKED_SOUTH: [GuiMessage; 2] = [GuiMessage::SetObstaclePosition { x: 6, y: 5 }, GuiMessage::MoveDone];
@@ -554,7 +557,7 @@ fn forwards_with_stall_watch(forwards: u8, pinned_after_m: Option<f64>, watch: b
         if h.move_done_count() == 1 {
             break;
         }
-        h.robot.pinned = pinned_after_m.is_some_and(|m| h.robot.x >= m) && h.carto.stats().stalls == 0;
+        h.robot.pinned = pinned_after_m.is_some_and(|m| h.robot.x >= m) && h.carto.stats().pilot.stalls == 0;
         h.robot.distance_cm = wall_cm - (h.robot.x * 100.0) as f32;
         h.tick();
     }
@@ -566,7 +569,7 @@ fn forwards_with_stall_watch(forwards: u8, pinned_after_m: Option<f64>, watch: b
 fn a_forward_towards_a_wall_is_not_taken_for_a_stall() {
     let h = forwards_with_stall_watch(1, None, true);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
-    assert_eq!(h.carto.stats().stalls, 0);
+    assert_eq!(h.carto.stats().pilot.stalls, 0);
     assert!((h.robot.x - 0.30).abs() <= 0.015, "ended at {:.3} m", h.robot.x);
 }
 
@@ -575,7 +578,7 @@ fn a_forward_whose_range_holds_while_the_wheels_turn_is_stopped_and_reported() {
     // the body is held after 5 cm; its wheels spin on and count
     let h = forwards_with_stall_watch(1, Some(0.05), true);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
-    assert_eq!(h.carto.stats().stalls, 1);
+    assert_eq!(h.carto.stats().pilot.stalls, 1);
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)), "the stored cell moved");
     // Carto took the sonar's word for where the body stood (5 cm along, not the wheels' 20 cm or
     // more), so the back-off brought the body, let go, back to the centre; a correction left out
@@ -591,7 +594,7 @@ fn a_forward_whose_range_holds_while_the_wheels_turn_is_stopped_and_reported() {
 fn a_stall_in_a_trajectory_ends_the_batch_as_the_bumper_does() {
     let h = forwards_with_stall_watch(3, Some(0.05), true);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
-    assert_eq!(h.carto.stats().stalls, 1);
+    assert_eq!(h.carto.stats().pilot.stalls, 1);
     // neither did the rest of the batch run, nor did the back-off miss the centre
     assert!(h.robot.x.abs() <= 0.03, "the body ended {:.3} m from the centre", h.robot.x);
 }
@@ -629,7 +632,7 @@ fn forwards_nudged(forwards: u8, nudge_deg: f64, watch: bool) -> Harness {
 /// them over the push threshold.
 fn push_counts(h: &Harness) -> (u64, u64, u64) {
     let s = h.carto.stats();
-    (s.pushes, s.heading_jumps, s.push_jumps)
+    (s.pilot.pushes, s.heading_jumps, s.push_jumps)
 }
 
 #[test]
@@ -744,7 +747,7 @@ fn forwards_after_hearing(
         assert!(h.run_until(8000, |h| h.move_done_count() == 1), "no MOVE_DONE for the third FORWARD");
         third = h.reply_msgs();
     }
-    let kept = h.carto.stats().drive_readings;
+    let kept = h.carto.stats().pilot.drive_readings;
     (second, kept, third, h)
 }
 
@@ -792,7 +795,7 @@ fn a_post_heard_while_driving_that_refused_a_forward_is_avoided_by_the_turn_afte
     h.send(cartography(Command::Right));
     let back = run_to_move_done_tracking(&mut h, 1, |h| x0 - h.robot.x);
     let stats = h.carto.stats();
-    assert_eq!((stats.turns_shifted, stats.turns_refused), (1, 0));
+    assert_eq!((stats.pilot.turns_shifted, stats.pilot.turns_refused), (1, 0));
     assert!(back >= 0.02, "backed off {back:.3} m");
 }
 
@@ -855,7 +858,7 @@ fn forward_hearing_past_a_right_turn(
         }
     }
     assert_eq!(h.move_done_count(), 1, "no MOVE_DONE for the FORWARD");
-    (h.reply_msgs(), h.carto.stats().turn_readings, past_in_turn)
+    (h.reply_msgs(), h.carto.stats().pilot.turn_readings, past_in_turn)
 }
 
 #[test]
@@ -1065,7 +1068,7 @@ fn forwards_along_a_wall(cells: usize, plan: bool) -> (u64, f64, f64) {
         });
         (left, right) = (left.max(most), right.max(-least.get()));
     }
-    (h.carto.stats().looks_aside, left, right)
+    (h.carto.stats().pilot.looks_aside, left, right)
 }
 
 #[test]

@@ -39,7 +39,7 @@ fn forward_clear_moves_one_cell(telemetry: bool) {
     assert!(yaw_deg(&h).abs() <= 2.0, "drifted to {:.2}°", yaw_deg(&h));
     assert!(!h.robot.moving(), "wheels still turning at MOVE_DONE");
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 6)));
-    assert_eq!(h.carto.stats().moves_done, 1);
+    assert_eq!(h.carto.stats().pilot.moves_done, 1);
 }
 
 #[test]
@@ -155,7 +155,7 @@ fn trajectory_batch_of_6_reports_each_forward_then_one_move_done() {
         h.robot.x,
         h.robot.y
     );
-    assert_eq!(h.carto.stats().moves_done, 6);
+    assert_eq!(h.carto.stats().pilot.moves_done, 6);
 }
 
 #[test]
@@ -271,7 +271,7 @@ fn cartography_without_pose_or_with_bad_command_gets_move_done_only() {
         vec![GuiMessage::RobotPositionReceived, GuiMessage::MoveDone, GuiMessage::MoveDone]
     );
     assert!(h.distance_from(0.0, 0.0) < 1e-9);
-    assert_eq!(h.carto.stats().moves_failed, 3);
+    assert_eq!(h.carto.stats().pilot.moves_failed, 3);
 }
 
 #[test]
@@ -330,7 +330,7 @@ fn peer_lost_stops_the_motors_and_fails_the_move() {
     assert_eq!(h.reply_msgs(), vec![GuiMessage::MoveDone]);
     assert!(h.robot.drives.last().unwrap().1.is_stop());
     let st = h.carto.stats();
-    assert_eq!((st.peer_lost_events, st.moves_failed), (1, 1));
+    assert_eq!((st.peer_lost_events, st.pilot.moves_failed), (1, 1));
     assert!(!h.carto.status().sensor_board_ok);
     // While lost, moves are refused.
     h.send(cartography(Command::Right));
@@ -341,7 +341,7 @@ fn peer_lost_stops_the_motors_and_fails_the_move() {
     assert!(h.carto.status().sensor_board_ok);
     h.send(cartography(Command::Right));
     assert!(h.run_until(8000, |h| h.move_done_count() == 3));
-    assert_eq!(h.carto.stats().moves_done, 1);
+    assert_eq!(h.carto.stats().pilot.moves_done, 1);
 }
 
 #[test]
@@ -360,7 +360,7 @@ fn bumper_during_forward_stops_reports_obstacle_and_backs_off() {
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetObstaclePosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     assert!(h.distance_from(0.0, 0.0) <= 0.015, "not back at the start: {:.3}", h.distance_from(0.0, 0.0));
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)));
-    assert_eq!(h.carto.stats().bumps, 1);
+    assert_eq!(h.carto.stats().pilot.bumps, 1);
 }
 
 #[test]
@@ -375,7 +375,7 @@ fn jammed_wheels_time_out_and_stop() {
     assert_eq!(h.reply_msgs(), vec![GuiMessage::RobotPositionReceived, GuiMessage::MoveDone]);
     assert!(h.replies[1].0 >= Instant::from_millis(2500), "failed too early");
     assert!(h.robot.drives.last().unwrap().1.is_stop());
-    assert_eq!(h.carto.stats().moves_failed, 1);
+    assert_eq!(h.carto.stats().pilot.moves_failed, 1);
     assert_eq!(h.carto.status().pose.map(|p| (p.x, p.y)), Some((5, 5)));
 }
 
@@ -398,7 +398,7 @@ fn a_turn_jammed_part_way_is_turned_back_before_its_move_done() {
     // back at the heading it started from, which Carto still stores
     assert!(h.robot.yaw.to_degrees().abs() <= 3.0, "yaw {:.1}°", h.robot.yaw.to_degrees());
     assert_eq!(h.carto.status().pose.map(|p| p.heading), Some(Heading::East));
-    assert_eq!((h.carto.stats().moves_failed, h.carto.stats().turns_undone), (1, 1));
+    assert_eq!((h.carto.stats().pilot.moves_failed, h.carto.stats().pilot.turns_undone), (1, 1));
     // the next FORWARD holds EAST, not the angle the body jammed at
     h.robot.yaw_min_deg = None;
     h.robot.distance_cm = 200.0;

@@ -76,27 +76,10 @@ impl Carto {
 
     /// The counters.
     pub fn stats(&self) -> CartoStats {
-        let p = self.pilot.counters();
         CartoStats {
-            moves_done: p.moves_done,
-            moves_failed: p.moves_failed,
-            obstacles: p.obstacles,
-            bumps: p.bumps,
-            corridor_blocked: p.corridor_blocked,
-            forwards_aside: p.forwards_aside,
-            forwards_slid: p.forwards_slid,
-            turns_shifted: p.turns_shifted,
-            turns_recentred: p.turns_recentred,
-            turns_refused: p.turns_refused,
-            turns_undone: p.turns_undone,
-            turn_readings: p.turn_readings,
-            drive_readings: p.drive_readings,
-            stalls: p.stalls,
-            pushes: p.pushes,
+            pilot: self.pilot.counters(),
             heading_jumps: self.sensors.imu_drift_jumps(),
             push_jumps: self.sensors.drift_counts().pushes,
-            pose_fixes: p.pose_fixes,
-            looks_aside: p.looks_aside,
             ..self.stats
         }
     }

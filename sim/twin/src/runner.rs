@@ -300,13 +300,13 @@ impl Lockstep {
         self.carto.step(now);
         if let Some(before) = before {
             let after = self.carto.carto().stats();
-            if after.stalls != before.stalls {
+            if after.pilot.stalls != before.pilot.stalls {
                 self.note_stop(now, "Carto stopped a stalled FORWARD");
             }
-            if after.pushes != before.pushes {
+            if after.pilot.pushes != before.pilot.pushes {
                 self.note_stop(now, "Carto stopped a FORWARD: the IMU saw the body turned under its wheels");
             }
-            if after.obstacles != before.obstacles {
+            if after.pilot.obstacles != before.pilot.obstacles {
                 self.note_obstacle_report(now);
             }
         }

@@ -103,7 +103,7 @@ fn a_forward_pinned_against_an_unseen_box_is_stopped_and_the_room_still_mapped()
         ron.replace("start: (row: 5, col: 4, heading: South)", "start: (row: 5, col: 4, heading: North)")
     };
     let run = run_room_edited(RoomStyle::Irregular, 9, Oracle::None, north);
-    let stalls = run.carto().stats().stalls;
+    let stalls = run.carto().stats().pilot.stalls;
     let r = run.report(1.0);
     println!(
         "irregular seed 9: {stalls} stalls, coverage {:.0} %, position error {:.2} m, Cute {:?}, true {:?}",

@@ -17,7 +17,11 @@ impl Lockstep {
     /// at its end (`at_end`).
     pub(super) fn measure(&mut self, now: Instant, move_ended: bool, at_end: bool) {
         let stats = self.carto.carto().stats();
-        let counters = NoticeCounters { bumps: stats.bumps, pushes: stats.pushes, stalls: stats.stalls };
+        let counters = NoticeCounters {
+            bumps: stats.pilot.bumps,
+            pushes: stats.pilot.pushes,
+            stalls: stats.pilot.stalls,
+        };
         let body = self.twin.body();
         let ((vx, vy), _) = body.world().robot_velocity();
         let motion =
@@ -33,7 +37,7 @@ impl Lockstep {
             || carto.activity().describe().to_string(),
         );
 
-        let refusals = stats.obstacles + stats.turns_refused;
+        let refusals = stats.pilot.obstacles + stats.pilot.turns_refused;
         let refused = refusals != self.refusals_seen;
         self.refusals_seen = refusals;
         let second = now.total_micros() / BELIEF_EVERY_US != (now - self.dt).total_micros() / BELIEF_EVERY_US;
