@@ -406,39 +406,52 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
 
     fn read_boards(&mut self, now: Instant, report: &mut StepReport) {
         if let Some(link) = self.motor.as_mut() {
-            match read_into(link, &mut self.buf, &mut self.stats.motor_bytes_in, |b| {
+            let end = read_into(link, &mut self.buf, &mut self.stats.motor_bytes_in, |b| {
                 self.carto.on_motor_bytes(now, b)
-            }) {
-                ReadEnd::Ok => {}
-                ReadEnd::Lost(e) => {
-                    tracing::error!(error = %e, "motor board link lost: motors stopped, moves dropped");
-                    self.motor = None;
-                    self.motor_out.clear();
-                    report.motor_lost = true;
-                    self.carto.on_motor_link_lost(now);
-                }
-                ReadEnd::Error(e) => {
-                    self.stats.board_io_errors += 1;
-                    warn_limited!(self.carto.limiter(), now, "motor board read error", error = %e, "motor board read error");
-                }
-            }
+            });
+            self.board_read_ended(now, Board::Motor, end, report);
         }
         if let Some(link) = self.sensor.as_mut() {
-            match read_into(link, &mut self.buf, &mut self.stats.sensor_bytes_in, |b| {
+            let end = read_into(link, &mut self.buf, &mut self.stats.sensor_bytes_in, |b| {
                 self.carto.on_sensor_bytes(now, b)
-            }) {
-                ReadEnd::Ok => {}
-                ReadEnd::Lost(e) => {
-                    tracing::error!(error = %e, "sensor board link lost: motors stopped, moves dropped");
-                    self.sensor = None;
-                    self.sensor_out.clear();
-                    report.sensor_lost = true;
-                    self.carto.on_sensor_link_lost(now);
+            });
+            self.board_read_ended(now, Board::Sensor, end, report);
+        }
+    }
+
+    /// Acts on how reading `board` ended: a lost link is dropped with the output pending for it
+    /// and Carto is told (its motors stop, its moves are dropped); a read error is counted and
+    /// logged, rate-limited.
+    fn board_read_ended<E: core::fmt::Display>(
+        &mut self,
+        now: Instant,
+        board: Board,
+        end: ReadEnd<E>,
+        report: &mut StepReport,
+    ) {
+        match end {
+            ReadEnd::Ok => {}
+            ReadEnd::Lost(e) => {
+                tracing::error!(error = %e, "{} link lost: motors stopped, moves dropped", board.name());
+                match board {
+                    Board::Motor => {
+                        self.motor = None;
+                        self.motor_out.clear();
+                        report.motor_lost = true;
+                        self.carto.on_motor_link_lost(now);
+                    }
+                    Board::Sensor => {
+                        self.sensor = None;
+                        self.sensor_out.clear();
+                        report.sensor_lost = true;
+                        self.carto.on_sensor_link_lost(now);
+                    }
                 }
-                ReadEnd::Error(e) => {
-                    self.stats.board_io_errors += 1;
-                    warn_limited!(self.carto.limiter(), now, "sensor board read error", error = %e, "sensor board read error");
-                }
+            }
+            ReadEnd::Error(e) => {
+                self.stats.board_io_errors += 1;
+                let kind = board.read_error();
+                warn_limited!(self.carto.limiter(), now, kind, error = %e, "{kind}");
             }
         }
     }
@@ -500,6 +513,31 @@ impl<L: Listener, M: Link, S: Link> CartoRuntime<L, M, S> {
                     warn_limited!(self.carto.limiter(), now, "sensor board write error", error = %e, "sensor board write error");
                 }
             }
+        }
+    }
+}
+
+/// One of the two boards, for how reading its link ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Board {
+    Motor,
+    Sensor,
+}
+
+impl Board {
+    /// The board's name in log lines.
+    fn name(self) -> &'static str {
+        match self {
+            Board::Motor => "motor board",
+            Board::Sensor => "sensor board",
+        }
+    }
+
+    /// The kind a read error of this board is rate-limited and logged as.
+    fn read_error(self) -> &'static str {
+        match self {
+            Board::Motor => "motor board read error",
+            Board::Sensor => "sensor board read error",
         }
     }
 }
