@@ -234,6 +234,44 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
 }
 
 #[test]
+fn after_sliding_round_a_leg_and_turning_round_the_forward_back_goes_the_way_the_body_came() {
+    let mut h = forward_past_a_leg(true);
+    assert!(h.run_until(30_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way in");
+    for (k, turn) in [Command::Left, Command::Left].into_iter().enumerate() {
+        h.send(cartography(turn));
+        assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2), "turn {k} not done");
+    }
+    h.replies.clear();
+    // the straight reading at rest hears an echo 20 cm ahead, within the one-cell threshold: a
+    // FORWARD from anywhere else is refused for it, this one goes back where the body came from
+    h.robot.distance_cm = 20.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
+    for _ in 0..30_000 {
+        h.tick();
+        rightmost = rightmost.min(h.robot.y);
+        if (h.robot.x - 0.16).abs() <= 0.13 {
+            closest = closest.min(0.11 - (h.robot.y + 0.12));
+        }
+        if h.move_done_count() == 1 {
+            break;
+        }
+    }
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 5 }, GuiMessage::MoveDone]);
+    assert_eq!(h.carto.stats().pilot.forwards_slid, 2);
+    // back past the leg on the side the way in took, keeping the clearance, to the first centre
+    assert!(rightmost <= -0.025, "slid only {rightmost:.3} m right");
+    assert!(closest >= 0.01, "the body's flank passed {closest:.3} m from the leg");
+    assert!(h.distance_from(0.0, 0.0) <= 0.02, "ended {:.3} m from the centre", h.distance_from(0.0, 0.0));
+    // a second FORWARD the same way (west, out of the first cell) was not slid in: refused
+    h.replies.clear();
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(5000, |h| h.move_done_count() == 1), "no MOVE_DONE");
+    assert!(h.reply_msgs().iter().any(|m| matches!(m, GuiMessage::SetObstaclePosition { .. })));
+}
+
+#[test]
 fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
     // the slide of the test above, cut by a STOP once the body has slid 1.5 cm right
     let mut h = forward_past_a_leg(true);

@@ -259,6 +259,7 @@ impl Pilot {
     fn fail(&mut self, now: Instant, why: &str) {
         self.note("move cannot run", true, format!("move cannot run ({why}): task ends with MOVE_DONE only"));
         self.counters.moves_failed += 1;
+        self.sliding.forget_way_in();
         self.end_task(now);
     }
 
@@ -317,6 +318,13 @@ impl Pilot {
                             self.fail(io.now, "no distance reading taken at rest");
                         }
                         Check::Pending => return,
+                        Check::Obstacle { cm }
+                            if !io.sensors.bumper_pressed() && self.way_back().is_some() =>
+                        {
+                            self.localise(io, Some(cm));
+                            self.note_reading(io, Some(cm));
+                            self.go_back_the_way_in(io);
+                        }
                         Check::Obstacle { cm } => {
                             self.note(
                                 "obstacle ahead",
@@ -498,6 +506,10 @@ impl Pilot {
     }
 
     fn move_succeeded(&mut self, kind: Move) {
+        let from = self.place.pose();
+        if kind == Move::Forward {
+            self.sliding.forward_made(from);
+        }
         let Some((pose, entered)) = self.place.move_made(kind) else {
             // without a pose the echo points cannot follow the robot
             self.echoes.forget();

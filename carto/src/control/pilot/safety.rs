@@ -438,6 +438,7 @@ impl Pilot {
 
     /// The corridor check, then the FORWARD.
     fn drive_forward(&mut self, io: &mut Io<'_>) {
+        let way_back = self.way_back();
         self.sliding.forget();
         if self.scan_missing {
             return self.fail(io.now, "scan incomplete: no distance reading at rest");
@@ -464,7 +465,7 @@ impl Pilot {
                         track_left_m = track;
                     }
                     None => {
-                        if let Some(way) = self.slide_way(io) {
+                        if let Some(way) = way_back.or_else(|| self.slide_way(io)) {
                             return self.start_slide(io, way);
                         }
                         if hit.heard_moving {
@@ -493,6 +494,7 @@ impl Pilot {
         if self.place.pose().is_none() {
             self.echoes.forget();
         }
+        self.sliding.forget_way_in();
         self.forward.start(io, self.place.straight_range_m());
         match io.motor.start_next_cell_on(io.now, track_left_m, io.sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },

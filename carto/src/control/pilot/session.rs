@@ -32,6 +32,7 @@ impl Pilot {
                         // dead-reckoned offset, e.g. of a FORWARD cut short by the disconnect, so
                         // the next move still ends on a cell centre.
                         if self.place.set_pose(pose) {
+                            self.sliding.forget_way_in();
                             self.look_pending = None;
                             self.reface_failures = 0;
                             if motor.rotation_was_cut() {
@@ -148,7 +149,7 @@ impl Pilot {
             self.echoes.forget();
         }
         self.tasks.clear();
-        self.sliding.forget();
+        self.sliding.forget_way_in();
         self.stage = Stage::Next;
         self.rest_since = now;
     }

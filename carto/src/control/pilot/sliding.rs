@@ -31,7 +31,7 @@
 
 use std::collections::VecDeque;
 
-use robot_model::grid::Move;
+use robot_model::grid::{GridPose, Move};
 use robot_model::time::Instant;
 
 use super::{Io, Pilot, Stage};
@@ -49,6 +49,17 @@ pub(super) struct Sliding {
     /// Where the body stood when the running FORWARD's sliding way began and at the end of each
     /// leg since: a back-off retraces them ([`Pilot::retrace_slide`]).
     visited: Vec<(f64, f64)>,
+    /// The way the body came into its cell, when the last FORWARD made was slid and the body
+    /// has only turned since: the way back ([`Pilot::way_back`]).
+    way_in: Option<WayIn>,
+}
+
+/// A sliding FORWARD made: the pose it started from and the places its body passed, from that
+/// cell's centre in its heading's frame.
+#[derive(Debug, Clone, PartialEq)]
+struct WayIn {
+    from: GridPose,
+    places: Vec<(f64, f64)>,
 }
 
 impl Sliding {
@@ -57,6 +68,20 @@ impl Sliding {
     pub(super) fn forget(&mut self) {
         self.legs.clear();
         self.visited.clear();
+    }
+
+    /// Forgets also the way the body came in: it moves, or was moved, otherwise than by turning.
+    pub(super) fn forget_way_in(&mut self) {
+        self.forget();
+        self.way_in = None;
+    }
+
+    /// A FORWARD from `from` was made: if it was slid, its places are the way back
+    /// ([`Pilot::way_back`]); if not, there is none.
+    pub(super) fn forward_made(&mut self, from: Option<GridPose>) {
+        self.way_in = from
+            .filter(|_| !self.visited.is_empty())
+            .map(|from| WayIn { from, places: core::mem::take(&mut self.visited) });
     }
 }
 
@@ -119,6 +144,36 @@ impl Pilot {
         self.plan_slide(io, false, slide::plan)
     }
 
+    /// The FORWARD back into the cell the body came from by a sliding way, when that is the
+    /// FORWARD asked for (the body stands where the way ended, turned round on the spot): the
+    /// way's places in reverse, mirrored into the cell's frame facing back. That space the body
+    /// swept, so a straight echo beside it (a leg the way went round) refuses nothing.
+    pub(super) fn way_back(&self) -> Option<slide::Slide> {
+        let way = self.sliding.way_in.as_ref()?;
+        let pose = self.place.pose()?;
+        let facing_back = pose.heading == way.from.heading.left().left();
+        if !self.free_space_known() || !facing_back || pose.ahead() != Some((way.from.x, way.from.y)) {
+            return None;
+        }
+        let cell = self.safety.cell_m;
+        let legs: Vec<(f64, f64)> =
+            way.places.iter().rev().map(|&(along, left)| (cell - along, -left)).collect();
+        let &(end_along, end_left) = legs.last()?;
+        Some(slide::Slide { legs, track_left_m: end_left, stop_along_m: end_along - cell })
+    }
+
+    /// Starts the FORWARD back the way the body came ([`Pilot::way_back`]) in place of refusing
+    /// it for an echo straight ahead.
+    pub(super) fn go_back_the_way_in(&mut self, io: &mut Io<'_>) {
+        match self.way_back() {
+            Some(way) => {
+                tracing::info!("FORWARD back the way the body came in, an echo ahead notwithstanding");
+                self.start_slide(io, way);
+            }
+            None => self.fail(io.now, "no way back"),
+        }
+    }
+
     /// The legs to the nearest place in the cell where the turning circle clears, or `None`.
     pub(super) fn turn_place(&self, io: &Io<'_>) -> Option<Vec<(f64, f64)>> {
         self.plan_slide(io, true, slide::plan_turn)
@@ -128,6 +183,7 @@ impl Pilot {
     pub(super) fn start_slide(&mut self, io: &mut Io<'_>, way: slide::Slide) {
         tracing::info!(legs = ?way.legs, track_left_m = way.track_left_m, stop_along_m = way.stop_along_m, "FORWARD by a sliding way through its two cells");
         self.counters.forwards_slid += 1;
+        self.sliding.way_in = None;
         self.sliding.legs = way.legs.into();
         self.sliding.track_left_m = way.track_left_m;
         self.sliding.stop_along_m = way.stop_along_m;
