@@ -272,6 +272,51 @@ fn after_sliding_round_a_leg_and_turning_round_the_forward_back_goes_the_way_the
 }
 
 #[test]
+fn with_a_floor_plan_the_forward_back_after_turning_round_is_made_whatever_echo_lies_ahead() {
+    // a straight FORWARD east into (5, 6) past nothing, a turn round on the spot, then the
+    // FORWARD back west with an echo 20 cm ahead (a leg beside the way, say)
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.carto.add_floor_plan([(-5.0, -5.0)]);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way in");
+    for (k, turn) in [Command::Right, Command::Right].into_iter().enumerate() {
+        h.send(cartography(turn));
+        assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2), "turn {k} not done");
+    }
+    h.replies.clear();
+    h.robot.distance_cm = 20.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way back");
+    assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 5 }, GuiMessage::MoveDone]);
+    assert!(h.distance_from(0.0, 0.0) <= 0.02, "ended {:.3} m from the centre", h.distance_from(0.0, 0.0));
+    // without a plan the same echo refuses the FORWARD back, as it refuses any
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(20_000, |h| h.move_done_count() == 1));
+    for (k, turn) in [Command::Right, Command::Right].into_iter().enumerate() {
+        h.send(cartography(turn));
+        assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2));
+    }
+    h.replies.clear();
+    h.robot.distance_cm = 20.0;
+    h.run_ms(150);
+    h.send(cartography(Command::Forward));
+    assert!(h.run_until(5000, |h| h.move_done_count() == 1));
+    assert!(h.reply_msgs().contains(&GuiMessage::SetObstaclePosition { x: 5, y: 5 }), "{:?}", h.reply_msgs());
+}
+
+#[test]
 fn a_stop_while_sliding_round_a_leg_stops_the_robot_and_answers_nothing() {
     // the slide of the test above, cut by a STOP once the body has slid 1.5 cm right
     let mut h = forward_past_a_leg(true);

@@ -27,6 +27,12 @@
 //!   through the centres; when no such place clears, within the band of the centre, short of it
 //!   or past it ([`crate::motor::Motor::start_next_cell_at`]): the odometry then holds the
 //!   body off the centre, and the next command starts from there.
+//! - **The way back.** The places the body passed on its last FORWARD (where it began, and the
+//!   end of each leg of a sliding way) are kept while the body only turns on the spot. A
+//!   FORWARD back into the cell it came from, facing back, goes along them in reverse, mirrored
+//!   into the cell's frame facing back ([`Pilot::way_back`]): space the body has just swept, so
+//!   a straight echo within one cell refuses nothing there. A robot that got into a pocket gets
+//!   out the way it came. Any other move, a STOP, a failure or a new pose forgets the places.
 //! - **What Cute hears.** Nothing new: a FORWARD made, or refused as before; a turn made or not.
 
 use std::collections::VecDeque;
@@ -49,8 +55,11 @@ pub(super) struct Sliding {
     /// Where the body stood when the running FORWARD's sliding way began and at the end of each
     /// leg since: a back-off retraces them ([`Pilot::retrace_slide`]).
     visited: Vec<(f64, f64)>,
-    /// The way the body came into its cell, when the last FORWARD made was slid and the body
-    /// has only turned since: the way back ([`Pilot::way_back`]).
+    /// Where the body stood when the running FORWARD began, when it is driven straight (on its
+    /// track, without legs).
+    straight_from: Option<(f64, f64)>,
+    /// The way the body came into its cell, when the body has only turned on the spot since the
+    /// last FORWARD made: the way back ([`Pilot::way_back`]).
     way_in: Option<WayIn>,
 }
 
@@ -68,6 +77,12 @@ impl Sliding {
     pub(super) fn forget(&mut self) {
         self.legs.clear();
         self.visited.clear();
+        self.straight_from = None;
+    }
+
+    /// A FORWARD driven straight begins with the body at `(along, left)` from its cell's centre.
+    pub(super) fn straight_began(&mut self, at: (f64, f64)) {
+        self.straight_from = Some(at);
     }
 
     /// Forgets also the way the body came in: it moves, or was moved, otherwise than by turning.
@@ -76,12 +91,14 @@ impl Sliding {
         self.way_in = None;
     }
 
-    /// A FORWARD from `from` was made: if it was slid, its places are the way back
-    /// ([`Pilot::way_back`]); if not, there is none.
+    /// A FORWARD from `from` was made: the places its body passed (where it began, and the end
+    /// of each leg of a sliding way) are the way back ([`Pilot::way_back`]).
     pub(super) fn forward_made(&mut self, from: Option<GridPose>) {
-        self.way_in = from
-            .filter(|_| !self.visited.is_empty())
-            .map(|from| WayIn { from, places: core::mem::take(&mut self.visited) });
+        let mut places = core::mem::take(&mut self.visited);
+        if places.is_empty() {
+            places.extend(self.straight_from.take());
+        }
+        self.way_in = from.filter(|_| !places.is_empty()).map(|from| WayIn { from, places });
     }
 }
 
@@ -144,7 +161,7 @@ impl Pilot {
         self.plan_slide(io, false, slide::plan)
     }
 
-    /// The FORWARD back into the cell the body came from by a sliding way, when that is the
+    /// The FORWARD back into the cell the body came from by its last FORWARD, when that is the
     /// FORWARD asked for (the body stands where the way ended, turned round on the spot): the
     /// way's places in reverse, mirrored into the cell's frame facing back. That space the body
     /// swept, so a straight echo beside it (a leg the way went round) refuses nothing.
@@ -184,6 +201,7 @@ impl Pilot {
         tracing::info!(legs = ?way.legs, track_left_m = way.track_left_m, stop_along_m = way.stop_along_m, "FORWARD by a sliding way through its two cells");
         self.counters.forwards_slid += 1;
         self.sliding.way_in = None;
+        self.sliding.straight_from = None;
         self.sliding.legs = way.legs.into();
         self.sliding.track_left_m = way.track_left_m;
         self.sliding.stop_along_m = way.stop_along_m;
