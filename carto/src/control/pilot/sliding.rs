@@ -63,8 +63,8 @@ pub(super) struct Sliding {
     way_in: Option<WayIn>,
 }
 
-/// A sliding FORWARD made: the pose it started from and the places its body passed, from that
-/// cell's centre in its heading's frame.
+/// A FORWARD made: the pose it started from and the places its body passed (where it began, and
+/// the end of each leg of a sliding way), from that cell's centre in its heading's frame.
 #[derive(Debug, Clone, PartialEq)]
 struct WayIn {
     from: GridPose,
