@@ -172,12 +172,7 @@ fn the_scan_refuses_a_forward_with_an_echo_beside_the_path() {
 /// and 16 cm behind the body at the next centre; with a floor plan (`plan`) or the leg's point
 /// alone.
 fn forward_past_a_leg(plan: bool) -> Harness {
-    let mut h = ready_with(fake::test_config_with(|c| {
-        c.cell_size_m = 0.45;
-        c.safety.obstacle_threshold_cm = 45.0;
-    }));
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
+    let mut h = ready_in_45_cm_cells();
     let leg = [(5.0 * 0.45 + 0.16, -5.0 * 0.45 + 0.11)];
     if plan {
         h.carto.add_floor_plan(leg);
@@ -188,16 +183,13 @@ fn forward_past_a_leg(plan: bool) -> Harness {
     h
 }
 
-#[test]
-fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
-    // (in 0.30 m cells, a leg deep in the body grown by the clearance at the next centre:
-    // refused, as the way is not clear)
-    let mut h = forward_past_a_leg(true);
+/// Runs the FORWARD of [`forward_past_a_leg`] (or the one back) to its MOVE_DONE, at most 30 s:
+/// how far right the body went, and the smallest gap between its left flank and the leg.
+fn past_the_leg(h: &mut Harness) -> (f64, f64) {
     let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
     for _ in 0..30_000 {
         h.tick();
         rightmost = rightmost.min(h.robot.y);
-        // beside the leg, the gap between the body's left flank and it
         if (h.robot.x - 0.16).abs() <= 0.13 {
             closest = closest.min(0.11 - (h.robot.y + 0.12));
         }
@@ -205,6 +197,15 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
             break;
         }
     }
+    (rightmost, closest)
+}
+
+#[test]
+fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_centre() {
+    // (in 0.30 m cells, a leg deep in the body grown by the clearance at the next centre:
+    // refused, as the way is not clear)
+    let mut h = forward_past_a_leg(true);
+    let (rightmost, closest) = past_the_leg(&mut h);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 6 }, GuiMessage::MoveDone]);
     let stats = h.carto.stats();
     assert_eq!((stats.pilot.forwards_slid, stats.pilot.corridor_blocked), (1, 0));
@@ -233,31 +234,48 @@ fn a_forward_with_a_leg_in_its_corridor_slides_round_it_and_ends_at_the_next_cen
     assert_eq!(h.carto.stats().pilot.forwards_slid, 0);
 }
 
-#[test]
-fn after_sliding_round_a_leg_and_turning_round_the_forward_back_goes_the_way_the_body_came() {
-    let mut h = forward_past_a_leg(true);
+/// After the first FORWARD's MOVE_DONE: turns round on the spot (`turn` twice), then sends the
+/// FORWARD back with the straight reading at rest hearing an echo 20 cm ahead, within the
+/// one-cell threshold (a FORWARD from anywhere else is refused for it). Replies start afresh.
+fn turn_round_and_forward_back(h: &mut Harness, turn: Command) {
     assert!(h.run_until(30_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way in");
-    for (k, turn) in [Command::Left, Command::Left].into_iter().enumerate() {
+    for k in 0..2 {
         h.send(cartography(turn));
         assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2), "turn {k} not done");
     }
     h.replies.clear();
-    // the straight reading at rest hears an echo 20 cm ahead, within the one-cell threshold: a
-    // FORWARD from anywhere else is refused for it, this one goes back where the body came from
     h.robot.distance_cm = 20.0;
     h.run_ms(150);
     h.send(cartography(Command::Forward));
-    let (mut rightmost, mut closest) = (0.0f64, f64::INFINITY);
-    for _ in 0..30_000 {
-        h.tick();
-        rightmost = rightmost.min(h.robot.y);
-        if (h.robot.x - 0.16).abs() <= 0.13 {
-            closest = closest.min(0.11 - (h.robot.y + 0.12));
-        }
-        if h.move_done_count() == 1 {
-            break;
-        }
+}
+
+/// Cell (5, 5) facing east in 0.45 m cells (the threshold one cell), the sonar hearing nothing.
+fn ready_in_45_cm_cells() -> Harness {
+    let mut h = ready_with(fake::test_config_with(|c| {
+        c.cell_size_m = 0.45;
+        c.safety.obstacle_threshold_cm = 45.0;
+    }));
+    h.robot.distance_cm = -1.0;
+    h.run_ms(150);
+    h
+}
+
+/// [`ready_in_45_cm_cells`], a FORWARD east sent; with a complete floor plan (`plan`) holding
+/// nothing near.
+fn forward_in_45_cm_cells(plan: bool) -> Harness {
+    let mut h = ready_in_45_cm_cells();
+    if plan {
+        h.carto.add_floor_plan([(-5.0, -5.0)]); // a complete plan, nothing near
     }
+    h.send(cartography(Command::Forward));
+    h
+}
+
+#[test]
+fn after_sliding_round_a_leg_and_turning_round_the_forward_back_goes_the_way_the_body_came() {
+    let mut h = forward_past_a_leg(true);
+    turn_round_and_forward_back(&mut h, Command::Left);
+    let (rightmost, closest) = past_the_leg(&mut h);
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 5 }, GuiMessage::MoveDone]);
     assert_eq!(h.carto.stats().pilot.forwards_slid, 2);
     // back past the leg on the side the way in took, keeping the clearance, to the first centre
@@ -273,45 +291,16 @@ fn after_sliding_round_a_leg_and_turning_round_the_forward_back_goes_the_way_the
 
 #[test]
 fn with_a_floor_plan_the_forward_back_after_turning_round_is_made_whatever_echo_lies_ahead() {
-    // a straight FORWARD east into (5, 6) past nothing, a turn round on the spot, then the
-    // FORWARD back west with an echo 20 cm ahead (a leg beside the way, say)
-    let mut h = ready_with(fake::test_config_with(|c| {
-        c.cell_size_m = 0.45;
-        c.safety.obstacle_threshold_cm = 45.0;
-    }));
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.carto.add_floor_plan([(-5.0, -5.0)]);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(20_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way in");
-    for (k, turn) in [Command::Right, Command::Right].into_iter().enumerate() {
-        h.send(cartography(turn));
-        assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2), "turn {k} not done");
-    }
-    h.replies.clear();
-    h.robot.distance_cm = 20.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
+    // a straight FORWARD east into (5, 6), a turn round on the spot, then the FORWARD back west
+    // with an echo 20 cm ahead (a leg beside the way, say)
+    let mut h = forward_in_45_cm_cells(true);
+    turn_round_and_forward_back(&mut h, Command::Right);
     assert!(h.run_until(20_000, |h| h.move_done_count() == 1), "no MOVE_DONE for the way back");
     assert_eq!(h.reply_msgs(), vec![GuiMessage::SetRobotPosition { x: 5, y: 5 }, GuiMessage::MoveDone]);
     assert!(h.distance_from(0.0, 0.0) <= 0.02, "ended {:.3} m from the centre", h.distance_from(0.0, 0.0));
     // without a plan the same echo refuses the FORWARD back, as it refuses any
-    let mut h = ready_with(fake::test_config_with(|c| {
-        c.cell_size_m = 0.45;
-        c.safety.obstacle_threshold_cm = 45.0;
-    }));
-    h.robot.distance_cm = -1.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
-    assert!(h.run_until(20_000, |h| h.move_done_count() == 1));
-    for (k, turn) in [Command::Right, Command::Right].into_iter().enumerate() {
-        h.send(cartography(turn));
-        assert!(h.run_until(20_000, |h| h.move_done_count() == k + 2));
-    }
-    h.replies.clear();
-    h.robot.distance_cm = 20.0;
-    h.run_ms(150);
-    h.send(cartography(Command::Forward));
+    let mut h = forward_in_45_cm_cells(false);
+    turn_round_and_forward_back(&mut h, Command::Right);
     assert!(h.run_until(5000, |h| h.move_done_count() == 1));
     assert!(h.reply_msgs().contains(&GuiMessage::SetObstaclePosition { x: 5, y: 5 }), "{:?}", h.reply_msgs());
 }

@@ -3,7 +3,7 @@
 //! Behaviour (protocols.md §2, seed 000 firmware):
 //! - Drive **v2** (`0x10`): `vx`, `vy`, `omega` are clamped to ±100 % (`speed_ratio` and the
 //!   reserved bytes are ignored, as the firmware does), mixed with
-//!   [`mix_percent`](crate::kinematics::mix_percent) (scale-down included) and turned into wheel
+//!   [`mix_percent`] (scale-down included) and turned into wheel
 //!   setpoints: 100 % = `max_wheel_rpm`.
 //! - Drive **v1** (`0x01`): offset-binary axes (`0x80` neutral; `0x00` → −100 %, `0xFF` →
 //!   +100 %) scaled by `min(gear, 8) / 8`; `dir_y` is forward, `dir_x` is strafe **right**, so
