@@ -465,7 +465,13 @@ impl Pilot {
                         track_left_m = track;
                     }
                     None => {
-                        if let Some(way) = way_back.or_else(|| self.slide_way(io)) {
+                        if let Some(way) = way_back {
+                            tracing::info!(
+                                "FORWARD back the way the body came in, an echo in its corridor notwithstanding"
+                            );
+                            return self.start_slide(io, way);
+                        }
+                        if let Some(way) = self.slide_way(io) {
                             return self.start_slide(io, way);
                         }
                         if hit.heard_moving {
