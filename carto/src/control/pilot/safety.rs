@@ -502,7 +502,7 @@ impl Pilot {
         }
         self.sliding.forget_way_in();
         let off = io.motor.odometry().offset();
-        self.sliding.straight_began((off.along_m, off.left_m));
+        self.sliding.straight_began((off.along_m, off.left_m), track_left_m);
         self.forward.start(io, self.place.straight_range_m());
         match io.motor.start_next_cell_on(io.now, track_left_m, io.sensors).map(|_| ()) {
             Ok(()) => self.stage = Stage::Moving { kind: Move::Forward, since: io.now },

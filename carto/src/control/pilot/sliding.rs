@@ -28,11 +28,14 @@
 //!   or past it ([`crate::motor::Motor::start_next_cell_at`]): the odometry then holds the
 //!   body off the centre, and the next command starts from there.
 //! - **The way back.** The places the body passed on its last FORWARD (where it began, and the
-//!   end of each leg of a sliding way) are kept while the body only turns on the spot. A
-//!   FORWARD back into the cell it came from, facing back, goes along them in reverse, mirrored
-//!   into the cell's frame facing back ([`Pilot::way_back`]): space the body has just swept, so
-//!   a straight echo within one cell refuses nothing there. A robot that got into a pocket gets
-//!   out the way it came. Any other move, a STOP, a failure or a new pose forgets the places.
+//!   end of each leg of a sliding way) and the track of its last drive are kept while the body
+//!   only turns on the spot. A FORWARD back into the cell it came from, facing back, goes the
+//!   same way in reverse, mirrored into the cell's frame facing back ([`Pilot::way_back`]): a
+//!   straight FORWARD as one drive on the mirrored track, a sliding way as its legs in reverse.
+//!   That is space the body has just swept, so a straight echo within one cell refuses nothing
+//!   there, and a robot that got into a pocket gets out the way it came. The places are the
+//!   odometry's: the way back is as good as the belief. Any other move, a STOP, a failure or a
+//!   new pose forgets them.
 //! - **What Cute hears.** Nothing new: a FORWARD made, or refused as before; a turn made or not.
 
 use std::collections::VecDeque;
@@ -63,12 +66,14 @@ pub(super) struct Sliding {
     way_in: Option<WayIn>,
 }
 
-/// A FORWARD made: the pose it started from and the places its body passed (where it began, and
-/// the end of each leg of a sliding way), from that cell's centre in its heading's frame.
+/// A FORWARD made: the pose it started from, the places its body passed (where it began, and
+/// the end of each leg of a sliding way), from that cell's centre in its heading's frame, and
+/// the track of its last drive, left of the line through the centres.
 #[derive(Debug, Clone, PartialEq)]
 struct WayIn {
     from: GridPose,
     places: Vec<(f64, f64)>,
+    track_left_m: f64,
 }
 
 impl Sliding {
@@ -80,9 +85,11 @@ impl Sliding {
         self.straight_from = None;
     }
 
-    /// A FORWARD driven straight begins with the body at `(along, left)` from its cell's centre.
-    pub(super) fn straight_began(&mut self, at: (f64, f64)) {
+    /// A FORWARD driven straight on the track `track_left_m` begins with the body at
+    /// `(along, left)` from its cell's centre.
+    pub(super) fn straight_began(&mut self, at: (f64, f64), track_left_m: f64) {
         self.straight_from = Some(at);
+        self.track_left_m = track_left_m;
     }
 
     /// Forgets also the way the body came in: it moves, or was moved, otherwise than by turning.
@@ -98,7 +105,8 @@ impl Sliding {
         if places.is_empty() {
             places.extend(self.straight_from.take());
         }
-        self.way_in = from.filter(|_| !places.is_empty()).map(|from| WayIn { from, places });
+        let track_left_m = self.track_left_m;
+        self.way_in = from.filter(|_| !places.is_empty()).map(|from| WayIn { from, places, track_left_m });
     }
 }
 
@@ -173,10 +181,21 @@ impl Pilot {
             return None;
         }
         let cell = self.safety.cell_m;
+        let &(start_along, _) = way.places.first()?;
+        if way.places.len() == 1 {
+            // driven straight: the same drive back, on the mirrored track, watched as any
+            return Some(slide::Slide {
+                legs: Vec::new(),
+                track_left_m: -way.track_left_m,
+                stop_along_m: -start_along,
+            });
+        }
         let legs: Vec<(f64, f64)> =
             way.places.iter().rev().map(|&(along, left)| (cell - along, -left)).collect();
         let &(end_along, end_left) = legs.last()?;
-        Some(slide::Slide { legs, track_left_m: end_left, stop_along_m: end_along - cell })
+        // the last leg ends where the way began: the drive after it has nothing left to go (the
+        // motor takes an offset past the next centre as the centre)
+        Some(slide::Slide { legs, track_left_m: end_left, stop_along_m: end_along.min(cell) - cell })
     }
 
     /// Starts the FORWARD back the way the body came ([`Pilot::way_back`]) in place of refusing
