@@ -318,31 +318,29 @@ impl Pilot {
                             self.fail(io.now, "no distance reading taken at rest");
                         }
                         Check::Pending => return,
-                        Check::Obstacle { cm }
-                            if !io.sensors.bumper_pressed() && self.way_back().is_some() =>
-                        {
-                            self.localise(io, Some(cm));
-                            self.note_reading(io, Some(cm));
-                            self.go_back_the_way_in(io);
-                        }
                         Check::Obstacle { cm } => {
-                            self.note(
-                                "obstacle ahead",
-                                false,
-                                format!("obstacle ahead at {cm} cm: no motion"),
-                            );
-                            if !io.sensors.bumper_pressed() {
+                            let pressed = io.sensors.bumper_pressed();
+                            if !pressed {
                                 self.localise(io, Some(cm));
                             }
                             self.note_reading(io, Some(cm));
-                            // a pressed bumper met the cell ahead; an echo straight ahead is
-                            // what the plan, if any, says of that cell
-                            if io.sensors.bumper_pressed() {
-                                self.report_obstacle();
+                            if !pressed && let Some(way) = self.way_back() {
+                                self.start_way_back(io, way, "an echo straight ahead");
                             } else {
-                                self.report_refused_forward(true);
+                                self.note(
+                                    "obstacle ahead",
+                                    false,
+                                    format!("obstacle ahead at {cm} cm: no motion"),
+                                );
+                                // a pressed bumper met the cell ahead; an echo straight ahead is
+                                // what the plan, if any, says of that cell
+                                if pressed {
+                                    self.report_obstacle();
+                                } else {
+                                    self.report_refused_forward(true);
+                                }
+                                self.end_task(io.now);
                             }
-                            self.end_task(io.now);
                         }
                         Check::Clear { cm } => {
                             tracing::debug!(?cm, "path clear");

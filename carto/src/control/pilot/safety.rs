@@ -438,7 +438,6 @@ impl Pilot {
 
     /// The corridor check, then the FORWARD.
     fn drive_forward(&mut self, io: &mut Io<'_>) {
-        let way_back = self.way_back();
         self.sliding.forget();
         if self.scan_missing {
             return self.fail(io.now, "scan incomplete: no distance reading at rest");
@@ -465,11 +464,8 @@ impl Pilot {
                         track_left_m = track;
                     }
                     None => {
-                        if let Some(way) = way_back {
-                            tracing::info!(
-                                "FORWARD back the way the body came in, an echo in its corridor notwithstanding"
-                            );
-                            return self.start_slide(io, way);
+                        if let Some(way) = self.way_back() {
+                            return self.start_way_back(io, way, "an echo in its corridor");
                         }
                         if let Some(way) = self.slide_way(io) {
                             return self.start_slide(io, way);

@@ -198,16 +198,11 @@ impl Pilot {
         Some(slide::Slide { legs, track_left_m: end_left, stop_along_m: end_along.min(cell) - cell })
     }
 
-    /// Starts the FORWARD back the way the body came ([`Pilot::way_back`]) in place of refusing
-    /// it for an echo straight ahead.
-    pub(super) fn go_back_the_way_in(&mut self, io: &mut Io<'_>) {
-        match self.way_back() {
-            Some(way) => {
-                tracing::info!("FORWARD back the way the body came in, an echo ahead notwithstanding");
-                self.start_slide(io, way);
-            }
-            None => self.fail(io.now, "no way back"),
-        }
+    /// Starts `way`, the FORWARD back the way the body came ([`Pilot::way_back`]), which
+    /// `refused_by` would otherwise have refused.
+    pub(super) fn start_way_back(&mut self, io: &mut Io<'_>, way: slide::Slide, refused_by: &str) {
+        tracing::info!(refused_by, "FORWARD back the way the body came in: space it has swept");
+        self.start_slide(io, way);
     }
 
     /// The legs to the nearest place in the cell where the turning circle clears, or `None`.
